@@ -1,0 +1,72 @@
+# femcontact: `make study` and `make test` install what is missing, then run.
+# Stamp files in .stamps/ record finished install steps; an interrupted step has
+# no stamp and is simply redone (apt and pip repair partial installs themselves).
+
+SHELL := /bin/bash
+VENV  := .venv
+PY    := $(VENV)/bin/python
+FEMCONTACT := $(VENV)/bin/femcontact
+STAMPS := .stamps
+SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+RANKS ?= 2
+
+APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py \
+	python3-meshio python3-pytest python3-venv python3-pip python3-matplotlib \
+	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6
+PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
+
+# Open MPI refuses to run as root unless told; harmless otherwise.
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+export OMP_NUM_THREADS := 1
+export OPENBLAS_NUM_THREADS := 1
+export PYVISTA_OFF_SCREEN := true
+
+STUDY_FILES := $(wildcard studies/*.toml)
+STUDIES := $(basename $(notdir $(STUDY_FILES)))
+DEFAULT_STUDY := wedging
+
+.PHONY: setup test test-serial test-mpi study bench clean $(STUDIES)
+
+setup: $(STAMPS)/venv
+
+$(STAMPS)/apt: Makefile
+	@mkdir -p $(STAMPS)
+	@if dpkg-query -W -f='$${Status}\n' $(APT_PACKAGES) 2>/dev/null | grep -qv "install ok installed" \
+	    || [ "$$(dpkg-query -W -f='$${Status}\n' $(APT_PACKAGES) 2>/dev/null | wc -l)" -lt "$(words $(APT_PACKAGES))" ]; then \
+	  echo "== installing Debian packages (a few minutes on a fresh machine)"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive dpkg --configure -a; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(APT_PACKAGES); \
+	fi
+	@touch $@
+
+$(STAMPS)/venv: $(STAMPS)/apt pyproject.toml
+	@echo "== preparing $(VENV) (Debian's DOLFINx + pip-only packages, numpy<2)"
+	@[ -x $(PY) ] || /usr/bin/python3 -m venv --system-site-packages $(VENV)
+	@$(PY) -m pip install -q --disable-pip-version-check $(PIP_PACKAGES)
+	@$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+	@$(PY) -c "import numpy, dolfinx, gmsh, pyvista; assert numpy.__version__ < '2', numpy.__version__"
+	@touch $@
+
+test: setup
+	$(MAKE) --no-print-directory test-serial test-mpi
+
+test-serial: setup
+	$(PY) -m pytest -q tests --ignore=tests/mpi
+
+test-mpi: setup
+	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider tests/mpi
+
+study: $(DEFAULT_STUDY)
+
+$(STUDIES): %: setup
+	$(FEMCONTACT) study studies/$@.toml
+	$(FEMCONTACT) report studies/$@.toml
+
+bench: setup
+	$(PY) -m femcontact.bench
+
+clean:
+	rm -rf results
