@@ -71,11 +71,6 @@ class SchurNewton:
         n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[:n_owned, :dim]
         self.n_owned = n_owned
-        bc_mask = np.zeros(n_owned, dtype=bool)
-        for bc in p.bcs:
-            dofs = bc.dof_indices()[0]
-            bc_mask[(dofs[dofs < n_owned * dim]) // dim] = True
-        self.free_mask = np.repeat(~bc_mask, dim)
         self.iterations = 0
 
     # -- rigid-body modes of the current configuration ---------------------------------
@@ -197,13 +192,28 @@ class SchurNewton:
         rhs_r = -R_r + np.array([K_ru[i].dot(y) for i in range(n_r)])
         dr = np.zeros(n_r)
         if free.any():
-            S_ff = S[np.ix_(free, free)]
-            dr[free] = np.linalg.lstsq(S_ff, rhs_r[free], rcond=1e-12)[0]
+            dr[free] = self._rigid_step(S[np.ix_(free, free)], rhs_r[free])
         y.copy(du)
         du.scale(-1.0)
         for k in range(n_r):
             du.axpy(-dr[k], X[k])
         return du, dr
+
+    def _rigid_step(self, S_ff, rhs) -> np.ndarray:
+        """Solve S dr = rhs for the free rigid dofs inside a trust region.
+
+        A body out of contact has no stiffness: S is regularised by 1e-9 of its own scale
+        (or of E * size) and the step is capped at one contact element size h (rotations
+        at h / size), so a body that must travel to meet its partner gets there in steps
+        instead of leaping through it. The regularisation only shapes the step; the
+        converged state solves the unregularised equations."""
+        p = self.problem
+        size = p.shape["scale"]
+        scale = max(np.abs(np.diag(S_ff)).max(), float(p.constants["E"].value) * size)
+        dr = np.linalg.solve(S_ff + 1e-9 * scale * np.eye(len(rhs)), rhs)
+        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
+        cap = p.model.h_contact
+        return dr * min(1.0, cap / length) if length > 0 else dr
 
     def _linear_solve(self, rhs, out) -> None:
         self.ksp.solve(rhs, out)

@@ -1,0 +1,162 @@
+"""Run a contact scene: mesh, build the problem, step through the loads, report.
+
+Increments that fail (Newton or linear solver) are halved and retried up to
+`solver.max_cuts` times; after a success the increment grows back. A run that
+still fails raises `SimulationFailed` naming the step, the time and the residual
+history; nothing half-done is reported as a result.
+"""
+import csv
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from femcontact.errors import InputError
+
+
+class SimulationFailed(RuntimeError):
+    """The solver gave up on an increment after cutting it `max_cuts` times."""
+
+
+def load_points(model, rigid) -> dict:
+    """Named points of the rigid body in its shape frame (about its reference point)."""
+    from femcontact.obstacle import reference_point
+
+    Q0, origin = np.asarray(model.rigid["rotation"]), np.asarray(model.rigid["origin"])
+    points = {name: Q0.T @ (np.asarray(x) - origin) - reference_point(model.rigid) for name, x in model.points.items()}
+    points["reference"] = np.zeros(len(origin))
+    return points
+
+
+class Simulation:
+    """A scene's problem, solver, schedule and the history of its increments."""
+
+    def __init__(self, scene: dict, comm=MPI.COMM_WORLD):
+        from femcontact.loading import Schedule
+        from femcontact.newton import SchurNewton
+        from femcontact.outputs import Recorder
+        from femcontact.problem import Problem
+        from geometry.model import build
+
+        self.scene, self.timings = scene, {}
+        start = time.perf_counter()
+        self.model = build(scene, comm)
+        self.timings["mesh"] = time.perf_counter() - start
+        start = time.perf_counter()
+        self.problem = Problem(scene, self.model)
+        self.newton = SchurNewton(self.problem)
+        self.recorder = Recorder(self.problem, self.newton)
+        self.timings["forms"] = time.perf_counter() - start
+        weight = np.zeros(scene["dim"])
+        if "gravity" in scene["effects"]:
+            weight[-1] = -self.problem.rigid.mass * scene["dynamics"]["gravity"]
+        self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model, self.problem.rigid), weight)
+        self.history: list[dict] = []
+        self.timings["solve"] = 0.0
+        self.timings["output"] = 0.0
+
+    @property
+    def dofs(self) -> int:
+        V = self.problem.V
+        return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+
+    def run(self) -> list[dict]:
+        for index, step in enumerate(self.scene["steps"]):
+            self.run_step(index, step)
+        return self.history
+
+    def run_step(self, index: int, step: dict) -> None:
+        """Advance through one step with adaptive increments."""
+        nominal = step["duration"] / step["increments"]
+        t, dt, cuts = 0.0, nominal, 0
+        max_cuts = self.scene["solver"]["max_cuts"]
+        while t < step["duration"] * (1 - 1e-12):
+            dt = min(dt, step["duration"] - t)
+            load = self.schedule.load(index, t + dt, dt)
+            try:
+                iterations = self.increment(load)
+            except (RuntimeError, FloatingPointError) as error:
+                if cuts >= max_cuts:
+                    raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
+                                           f"after {cuts} cuts: {error}") from None
+                cuts += 1
+                dt /= 2
+                continue
+            t += dt
+            start = time.perf_counter()
+            self.history.append(self.recorder.row(load, iterations))
+            self.timings["output"] += time.perf_counter() - start
+            if cuts and iterations < 8:
+                dt, cuts = min(2 * dt, nominal), cuts - 1
+
+    def increment(self, load) -> int:
+        """Solve one increment from the last converged state; restore it on failure."""
+        from femcontact.newton import NewtonFailure
+
+        p = self.problem
+        state = p.state()
+        free = p.rigid.free
+        p.rigid.values[~free] = load.motion[~free]
+        p.rigid.sync()
+        p.set_time_step(load.dt)
+        start = time.perf_counter()
+        try:
+            iterations = self.newton.solve(load)
+        except NewtonFailure:
+            p.restore(state)
+            raise
+        finally:
+            self.timings["solve"] += time.perf_counter() - start
+        p.commit(load.dt)
+        return iterations
+
+    def write_history(self, path: Path) -> None:
+        if self.problem.mesh.comm.rank != 0 or not self.history:
+            return
+        keys = list(self.history[0])
+        with open(path, "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fieldnames=keys, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(self.history)
+
+    def step_end_rows(self) -> dict:
+        """The last row of every step, by step name."""
+        return {row["step"]: row for row in self.history}
+
+
+def summary_metrics(simulation: Simulation) -> dict:
+    """Flat metrics: every step-end output as '<step>.<quantity>', plus totals."""
+    metrics = {}
+    for step, row in simulation.step_end_rows().items():
+        for key, value in row.items():
+            if key != "step":
+                metrics[f"{step}.{key}"] = value
+    metrics["newton_iterations"] = sum(row["newton_iterations"] for row in simulation.history)
+    metrics["increments"] = len(simulation.history)
+    metrics["max_von_mises"] = max(row["max_von_mises"] for row in simulation.history)
+    metrics["yielded"] = any(row["yielded"] for row in simulation.history)
+    return metrics
+
+
+def run_scene(scene: dict, case_dir: Path) -> dict:
+    """Run a resolved contact scene; write history.csv and fields.npz into case_dir."""
+    from femcontact.fields import write_fields
+
+    if not scene["steps"]:
+        raise InputError("steps: a contact scene needs at least one step")
+    simulation = Simulation(scene)
+    simulation.run()
+    case_dir = Path(case_dir)
+    start = time.perf_counter()
+    simulation.write_history(case_dir / "history.csv")
+    write_fields(simulation, case_dir)
+    simulation.timings["output"] += time.perf_counter() - start
+    metrics = summary_metrics(simulation)
+    if scene["geometry"] == "peg_in_hole":
+        from femcontact.wedging import wedge_metrics
+
+        metrics.update(wedge_metrics(simulation))
+    info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
+            "effects": list(scene["effects"]), "built": simulation.problem.built}
+    return {"metrics": metrics, "timings": simulation.timings, "info": info}

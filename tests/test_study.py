@@ -1,0 +1,282 @@
+"""The study runner: case ids, sweep expansion, resume after SIGKILL, failures, time limit,
+database and CSV, MPI cases, shared prefixes, plots and snapshots.
+
+Cases run through a fake launcher (tests/fake_case.py) that writes result.json like
+`femcontact run` does, so these tests depend neither on the solver nor on the RCC code.
+"""
+import csv
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from femcontact.cli import main
+from femcontact.database import Database
+from femcontact.errors import InputError
+from femcontact.scene import case_id, resolve
+from femcontact.schema import set_key
+from femcontact.study import expand, load_study, to_toml
+
+HERE = Path(__file__).parent
+FAKE = f"{sys.executable} {HERE / 'fake_case.py'}"
+PNG = b"\x89PNG\r\n\x1a\n"
+
+BASE = """
+kind = "contact"
+dim = 2
+geometry = "block"
+[contact]
+mu = 0.2
+[[steps]]
+name = "press"
+force = [0.0, -100.0]
+[[steps]]
+name = "pull"
+force = [10.0, -100.0]
+"""
+
+
+def make_study(tmp_path, body: str, name="demo", launcher=FAKE + " -n {ranks}", settings="") -> Path:
+    (tmp_path / "base.toml").write_text(BASE)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(f'[study]\nname = "{name}"\nscene = "base.toml"\njobs = 2\nlauncher = "{launcher}"\n'
+                    f"{settings}\n{body}")
+    return path
+
+
+@pytest.fixture
+def fake(tmp_path, monkeypatch):
+    """Environment of the fake case; returns a function counting invocations per case id."""
+    calls = tmp_path / "calls"
+    calls.mkdir()
+    monkeypatch.setenv("FAKE_CALLS", str(calls))
+    for knob in ("FAKE_SLEEP", "FAKE_FAIL_MU", "FAKE_CRASH_MU", "FAKE_HANG_MU", "FAKE_RANKS", "FAKE_FIELDS"):
+        monkeypatch.delenv(knob, raising=False)
+
+    def count() -> dict:
+        counts = {}
+        for path in calls.iterdir():
+            counts[path.name.split(".")[0]] = counts.get(path.name.split(".")[0], 0) + 1
+        return counts
+
+    return count
+
+
+def run_study(path, *options) -> int:
+    return main(["study", str(path), "--results", str(path.parent / "results"), "--quiet", *options])
+
+
+def results_of(path, name="demo") -> dict:
+    cases = path.parent / "results" / name / "cases"
+    return {d.name: json.loads((d / "result.json").read_text()) for d in cases.iterdir()
+            if (d / "result.json").exists()} if cases.exists() else {}
+
+
+# -- case ids, overrides, expansion ---------------------------------------------------------------
+
+def test_case_id_ignores_order_and_formatting_not_values():
+    a = resolve(tomllib.loads(BASE))
+    b = resolve(tomllib.loads('geometry="block"\n  dim=2\n[[steps]]\nforce=[0, -1e2]\nname="press"\n'
+                              '[[steps]]\nname="pull"\nforce=[10, -100.0]\n[contact]\nmu=0.20\n'))
+    assert case_id(a) == case_id(b)
+    changed = resolve(tomllib.loads(BASE.replace("mu = 0.2", "mu = 0.2000001")))
+    assert case_id(changed) != case_id(a)
+    assert case_id(resolve(tomllib.loads(BASE), ["steps.1.force=[10.0, -100.5]"])) != case_id(a)
+
+
+def test_set_key_indexes_arrays():
+    data = tomllib.loads(BASE)
+    set_key(data, "steps.1.force", [1.0, 2.0])
+    set_key(data, "steps.0.pulse.frequency", 5.0)
+    assert data["steps"][1]["force"] == [1.0, 2.0] and data["steps"][0]["pulse"] == {"frequency": 5.0}
+    with pytest.raises(InputError, match="steps.2.force"):
+        set_key(data, "steps.2.force", [0.0, 0.0])
+    with pytest.raises(InputError, match="contact.mu.x"):
+        set_key(data, "contact.mu.x", 1)
+
+
+def test_scene_toml_round_trip_keeps_the_case_id():
+    scene = resolve(tomllib.loads(BASE), ['solver.petsc_options={ksp_type = "preonly", "pc.x" = 1}'])
+    again = resolve(tomllib.loads(to_toml(scene)))
+    assert again == scene and case_id(again) == case_id(scene)
+
+
+def test_expand_grid_times_zip_plus_cases():
+    sweep = {"grid": {"a": [1, 2], "b": {"c": [3, 4, 5]}}, "zip": {"x": [6, 7], "y": [8, 9]},
+             "cases": [{"a": 0}]}
+    sets = expand(sweep)
+    assert len(sets) == 2 * 3 * 2 + 1
+    assert sets[0] == {"a": 1, "b.c": 3, "x": 6, "y": 8} and sets[1] == {"a": 1, "b.c": 3, "x": 7, "y": 9}
+    assert sets[-1] == {"a": 0}
+    assert expand({}) == [{}] and expand({"cases": [{"a": 1}]}) == [{"a": 1}]
+
+
+def test_study_validates_every_case_before_running(tmp_path, fake):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, -1.0], "steps.1.force" = [[1.0, 2.0]] }\n'
+                                'zip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1, 2] }')
+    with pytest.raises(InputError, match=r"1 invalid.*contact.mu=-1.0.*contact.mu = -1.0: out of range"):
+        load_study(path, results_root=tmp_path / "results")
+    path.write_text(path.read_text().replace("-1.0", "0.3"))
+    study = load_study(path, ["contact.theta=1"], results_root=tmp_path / "results")
+    assert len(study.cases) == 4 and study.keys == ["contact.mu", "steps.1.force", "contact.gamma", "mesh.degree"]
+    assert {case.scene["contact"]["theta"] for case in study.cases} == {1.0}
+    with pytest.raises(InputError, match="zipped lists must have one length"):
+        make_study(tmp_path, '[sweep]\nzip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1] }')
+        load_study(tmp_path / "demo.toml")
+    assert fake() == {}
+
+
+# -- running --------------------------------------------------------------------------------------
+
+def test_failures_do_not_stop_the_sweep_and_csv_matches_database(tmp_path, fake, monkeypatch, capsys):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3, 0.4] }')
+    monkeypatch.setenv("FAKE_FAIL_MU", "0.2")
+    monkeypatch.setenv("FAKE_CRASH_MU", "0.3")
+    assert run_study(path) == 1
+    out = capsys.readouterr().out
+    assert "4 cases, 2 ok, 2 failed" in out and "NewtonDiverged: no convergence at mu = 0.2" in out
+    results = results_of(path)
+    by_mu = {json.loads(Path(path.parent, "results/demo/cases", i, "runner.json").read_text())["slot"] >= 0
+             and tomllib.loads(Path(path.parent, "results/demo/cases", i, "scene.toml").read_text())["contact"]["mu"]:
+             r for i, r in results.items()}
+    assert by_mu[0.1]["status"] == by_mu[0.4]["status"] == "ok"
+    assert "exited with code 139 without a result; last log line: fake case: segmentation fault" \
+        in by_mu[0.3]["reason"]
+
+    database = Database(path.parent / "results/demo/results.sqlite", ["contact.mu"])
+    with open(path.parent / "results/demo/results.csv") as stream:
+        table = list(csv.DictReader(stream))
+    rows = database.rows(database.csv_columns())
+    assert [list(row) for row in table][0][:5] == ["case_id", "status", "contact.mu", "load", "product"]
+    assert [{k: "" if v is None else str(v) for k, v in row.items()} for row in rows] == table
+    assert {row["case_id"] for row in rows} == set(results) and rows[0]["dolfinx"] == "0.5.2"
+
+    monkeypatch.delenv("FAKE_FAIL_MU")
+    monkeypatch.delenv("FAKE_CRASH_MU")
+    assert run_study(path) == 1 and sum(fake().values()) == 4  # failed cases are done, not rerun
+    assert run_study(path, "--retry-failed") == 0 and sum(fake().values()) == 6
+    assert run_study(path, "--force") == 0 and set(fake().values()) == {2, 3}
+
+
+def test_time_limit_kills_a_hanging_case(tmp_path, fake, monkeypatch):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.5] }', settings="time_limit = 1")
+    monkeypatch.setenv("FAKE_HANG_MU", "0.5")
+    start = time.monotonic()
+    assert run_study(path) == 1
+    assert time.monotonic() - start < 8
+    reasons = sorted(str(r["reason"]) for r in results_of(path).values())
+    assert reasons == ["None", "time limit of 1 s exceeded"]
+
+
+def test_resume_after_sigkill_recomputes_nothing(tmp_path, fake):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3, 0.4, 0.5], '
+                                '"contact.gamma" = [1.0, 2.0, 3.0, 4.0] }')
+    env = {**os.environ, "FAKE_SLEEP": "0.4"}
+    command = [sys.executable, "-m", "femcontact.cli", "study", str(path), "--results", str(tmp_path / "results")]
+    runner = subprocess.Popen(command, env=env, stderr=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
+    deadline = time.monotonic() + 30
+    while len(results_of(path)) < 5 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    runner.send_signal(signal.SIGKILL)
+    runner.wait()
+    time.sleep(0.5)  # the orphaned cases got SIGTERM (parent-death signal) and die without a result
+    finished = set(results_of(path))
+    assert 5 <= len(finished) < 20
+    with sqlite3.connect(tmp_path / "results/demo/results.sqlite") as db:
+        rows = db.execute("SELECT case_id, status FROM cases").fetchall()
+    assert {case for case, _ in rows} <= finished and {status for _, status in rows} == {"ok"}
+    time.sleep(0.5)
+    assert set(results_of(path)) == finished  # nothing still running behind our back
+
+    assert subprocess.run(command + ["--quiet"], env=env, capture_output=True).returncode == 0
+    counts = fake()
+    assert len(results_of(path)) == 20 and set(counts) == set(results_of(path))
+    assert all(counts[case] == 1 for case in finished)
+    with sqlite3.connect(tmp_path / "results/demo/results.sqlite") as db:
+        assert db.execute("SELECT count(*), count(DISTINCT case_id) FROM cases").fetchone() == (20, 20)
+
+
+def test_runner_overhead_per_case(tmp_path, fake):
+    """Wall time of a serial sweep of 20 instant fake cases, minus their own totals, per case."""
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3, 0.4], '
+                                '"contact.gamma" = [1.0, 2.0, 3.0, 4.0, 5.0] }', settings="jobs = 1")
+    path.write_text(path.read_text().replace("jobs = 2\n", ""))
+    start = time.perf_counter()
+    assert run_study(path) == 0
+    wall = time.perf_counter() - start
+    totals = [result["timings"]["total"] for result in results_of(path).values()]
+    assert len(totals) == 20
+    overhead = (wall - sum(totals)) / 20
+    print(f"\nrunner overhead: {overhead * 1000:.0f} ms per case (includes starting the case's Python)")
+    assert overhead < 0.5
+
+
+def test_two_cases_on_two_mpi_ranks(tmp_path, fake, monkeypatch):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2] }',
+                      launcher=f"mpirun -n {{ranks}} {FAKE}", settings="ranks_per_case = 2")
+    path.write_text(path.read_text().replace("jobs = 2", "jobs = 1"))
+    for name, value in (("OMPI_ALLOW_RUN_AS_ROOT", "1"), ("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1"),
+                        ("OMPI_MCA_rmaps_base_oversubscribe", "1"), ("FAKE_RANKS", "2")):
+        monkeypatch.setenv(name, value)
+    assert run_study(path) == 0
+    results = results_of(path)
+    assert len(results) == 2 and {r["info"]["ranks"] for r in results.values()} == {2}
+    rows = Database(tmp_path / "results/demo/results.sqlite", ["contact.mu"]).rows()
+    assert [row["ranks"] for row in rows] == [2, 2]
+
+
+def test_shared_prefix_runs_once_and_variants_restart_from_it(tmp_path, fake):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "steps.1.force" = [[1.0, 0.0], [2.0, 0.0], [3.0, 0.0]] }',
+                      settings="shared_steps = 1")
+    assert run_study(path) == 0
+    prefix_dirs = list((tmp_path / "results/demo/prefix").iterdir())
+    assert len(prefix_dirs) == 1 and (prefix_dirs[0] / "checkpoint/state").exists()
+    calls = {p.name.split(".")[0]: p.read_text() for p in (tmp_path / "calls").iterdir()}
+    assert "--checkpoint" in calls.pop(prefix_dirs[0].name)
+    assert len(calls) == 3 and all(f"--restart {prefix_dirs[0].resolve()}/checkpoint" in a for a in calls.values())
+
+
+# -- report ---------------------------------------------------------------------------------------
+
+def test_report_writes_plots_summary_and_snapshots(tmp_path, fake, monkeypatch, capsys):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2], "contact.gamma" = [1.0, 2.0] }\n'
+                                '[[plot]]\nx = "contact.mu"\ny = "product"\nseries = "contact.gamma"\n'
+                                '[[plot]]\nx = "contact.gamma"\ny = "time.total"\nkind = "scatter"\n'
+                                'logy = true\nfile = "timing.png"\n'
+                                '[snapshots]\nselect = [ { "contact.mu" = 0.1, "contact.gamma" = 2.0 } ]\n'
+                                'zoom = "contact_A"')
+    monkeypatch.setenv("FAKE_FIELDS", "2")
+    assert run_study(path) == 0
+    assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
+    out = capsys.readouterr().out
+    results = tmp_path / "results/demo"
+    pictures = [results / "product_vs_contact.mu.png", results / "timing.png",
+                *(results / "snapshots").iterdir()]
+    assert len(pictures) == 3 and all(p.read_bytes()[:8] == PNG and str(p) in out for p in pictures)
+    summary = (results / "summary.md").read_text()
+    assert "4 cases: 4 ok" in summary and summary.count("| ok |") == 4
+
+
+@pytest.mark.parametrize("dim, cellwise", [(2, False), (3, True)])
+def test_snapshot_colour_bar_spans_the_field(tmp_path, dim, cellwise):
+    import matplotlib.pyplot as plt
+
+    sys.path.insert(0, str(HERE))
+    from synthetic_fields import write_fields
+
+    from femcontact.snapshot import render
+
+    von_mises = write_fields(tmp_path / "fields.npz", dim, cellwise)
+    info = render(tmp_path / "fields.npz", tmp_path / "s.png", zoom="contact_A")
+    assert info["range"] == pytest.approx((von_mises.min(), von_mises.max()), rel=1e-12)
+    image = plt.imread(tmp_path / "s.png")
+    assert (tmp_path / "s.png").read_bytes()[:8] == PNG and image.shape[0] > 100
+    assert len(np.unique(image.reshape(-1, image.shape[-1]), axis=0)) > 50  # not a blank picture
