@@ -95,7 +95,8 @@ class Database:
                 self._insert(row)
 
     def _insert(self, row: dict) -> None:
-        for name in row.keys() - set(self.columns()):
+        existing = set(self.columns())
+        for name in [name for name in row if name not in existing]:  # metrics in the order the case gives
             self.connection.execute(f"ALTER TABLE cases ADD COLUMN {_quote(name)}")
         names = ", ".join(map(_quote, row))
         self.connection.execute(f"INSERT OR REPLACE INTO cases ({names}) VALUES ({', '.join('?' * len(row))})",

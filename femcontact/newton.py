@@ -72,6 +72,9 @@ class SchurNewton:
         self.coordinates = p.V.tabulate_dof_coordinates()[:n_owned, :dim]
         self.n_owned = n_owned
         self.iterations = 0
+        self.corner_contacts = 0
+        self.bc_dofs = p.support_dof_set
+        self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
 
     # -- rigid-body modes of the current configuration ---------------------------------
     def _arms(self) -> np.ndarray:
@@ -104,11 +107,13 @@ class SchurNewton:
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
+            if b is self.b_contact:
+                self.corner_contacts = p.corners.add_residual(b)
             b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         contact = self.b_contact.array_r
         G = np.array([self._allsum(float(mode @ contact)) for mode in self._modes()])
         Q_ext = load.generalized_force(p.rigid.values)
-        R_r = -(Q_ext + G) + p.rigid_inertia_force(load)
+        R_r = -(Q_ext + G) + p.rigid_inertia_force(load) + self.stabilization @ (p.rigid.values - p.rigid.r_old.value)
         R_u = self.b_bulk.copy()
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
@@ -120,6 +125,18 @@ class SchurNewton:
         return float(np.sqrt(R_u.norm() ** 2 + np.sum(R_r[free] ** 2)))
 
     # -- Newton --------------------------------------------------------------------------
+    def stabilize(self, factor: float) -> None:
+        """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm; rotations
+        scaled by the body size squared) tying the rigid body to its last converged pose.
+        `factor` scales it (0 = off). It gives a body with no contact yet a finite
+        stiffness, as Abaqus' contact stabilisation does; the stepper then removes it by
+        continuation (see Simulation.increment)."""
+        p = self.problem
+        k = float(p.constants["E"].value) * p.model.h_contact
+        size = p.shape["scale"]
+        scale = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size * size)
+        self.stabilization = factor * np.diag(k * scale)
+
     def solve(self, load) -> int:
         """Solve one increment; returns the Newton iterations taken."""
         p, options = self.problem, self.problem.scene["solver"]
@@ -145,14 +162,16 @@ class SchurNewton:
         n_r, free = len(p.rigid.names), p.rigid.free
         self.K.zeroEntries()
         petsc.assemble_matrix(self.K, self.jacobian, bcs=p.bcs)
-        self.K.assemble()
         self.Kc.zeroEntries()
         petsc.assemble_matrix(self.Kc, self.jacobian_contact)
-        self.Kc.assemble()
         for b, form in zip(self.kur, self.contact_dr):
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
+        p.corners.add_jacobian([self.K, self.Kc], self.kur, self.bc_dofs)
+        self.K.assemble()
+        self.Kc.assemble()
+        for b in self.kur:
             b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
 
         contact = self.b_contact.array_r.reshape(-1, p.dim)
@@ -176,7 +195,8 @@ class SchurNewton:
                 K_rr[j, k] = -self._allsum(float(mode @ self.kur[k].array_r))
         for j in range(p.dim, n_r):  # d(e_a x (x - x_ref))/dt = -e_a x dt
             K_rr[j, : p.dim] += _cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
-        K_rr += -load.generalized_force_jacobian(p.rigid.values) + p.rigid_inertia_stiffness(load)
+        K_rr += (-load.generalized_force_jacobian(p.rigid.values) + p.rigid_inertia_stiffness(load)
+                 + self.stabilization)
 
         y, du = self.work[2 * n_r], self.work[2 * n_r + 1]
         self._linear_solve(R_u, y)
@@ -222,11 +242,11 @@ class SchurNewton:
         out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     def line_search(self, load, du, dr, norm, history) -> None:
-        """Take the longest step of 1, 1/2, ... 1/64 that lowers |R|; else the best found."""
+        """Take the longest step of 1, 1/2, ... 1/4096 that lowers |R|; else the best found."""
         p = self.problem
         u0, r0 = p.u.vector.copy(), p.rigid.values.copy()
         best = (np.inf, 1.0)
-        steps = [1.0] if not p.scene["solver"]["line_search"] else [2.0 ** -k for k in range(7)]
+        steps = [1.0] if not p.scene["solver"]["line_search"] else [2.0 ** -k for k in range(13)]
         for alpha in steps:
             self._update(u0, r0, du, dr, alpha)
             if len(steps) == 1:

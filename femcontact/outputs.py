@@ -105,6 +105,7 @@ class Recorder:
 
         nodal = self.nodal_values()
         row["max_pressure"] = self._max(float(nodal["pressure"].max(initial=0.0)))
+        row["corner_contacts"] = newton.corner_contacts
         for state in ("active", "stick", "slip"):
             row[f"{state}_nodes"] = int(self._sum(int((nodal[state] > 0.5).sum())))
         row["elastic_energy"] = self._sum(fem.assemble_scalar(self.energy))

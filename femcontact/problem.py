@@ -8,6 +8,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
+from femcontact.corners import RigidCorners
 from femcontact.effects import EFFECT_COMPONENTS, add_contact, add_elasticity, constants_for, make_constants
 from femcontact.errors import InputError
 from femcontact.rigid_body import RigidBody
@@ -50,7 +51,14 @@ class Problem:
         self.u = fem.Function(self.V, name="displacement")
         self.v = ufl.TestFunction(self.V)
         self.dx = ufl.Measure("dx", domain=self.mesh)
-        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=model.facet_tags)
+        # Contact terms use a fixed rule, so the residual and its derivatives integrate
+        # alike. In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact:
+        # a penetrating corner node is seen at once); basix has no such rule on triangles,
+        # so 3-D uses Gauss points of degree 2p + 2.
+        degree = scene["mesh"]["degree"]
+        quadrature = ({"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1} if self.dim == 2
+                      else {"quadrature_degree": 2 * degree + 2})
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=model.facet_tags, metadata=quadrature)
         self.ds_contact = ds(tuple(model.facets[name] for name in model.contact_facets))
         self.constants = make_constants(self.mesh, constants_for(scene, deformable))
         self.shape = self._shape_constants(model.rigid)
@@ -75,6 +83,9 @@ class Problem:
         self.contact_terms.insert(0, -ufl.dot(self.traction, self.v))
         self.contact_integrand = sum(self.contact_terms)
         self.bcs = self._supports()
+        self.corners = RigidCorners(self)
+        if len(self.corners.points):
+            self.built.append("rigid_corners")
         self.rigid_velocity = np.zeros(len(self.rigid.names))
         self.rigid_acceleration = np.zeros(len(self.rigid.names))
 
@@ -89,6 +100,11 @@ class Problem:
                 shape[key] = fem.Constant(self.mesh, float(shape[key]))
         shape["scale"] = max(float(rigid.get(k, 0.0)) for k in SHAPE_PARAMETERS)
         return shape
+
+    @property
+    def support_dof_set(self) -> set:
+        """Local (unrolled) indices of all supported dofs."""
+        return {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
 
     def _supports(self) -> list:
         fdim = self.dim - 1
@@ -148,6 +164,7 @@ class Problem:
             a_old[:] = a
         if "u_old" in self.history:
             self.history["u_old"].x.array[:] = self.u.x.array
+        self.corners.commit()
         self.rigid.commit()
 
     def state(self) -> dict:

@@ -77,6 +77,11 @@ class Rcc:
         """l_o = h / sin(theta_L) (mm), with T = 0."""
         return self.h / math.sin(self.theta)
 
+    @property
+    def raised_link_length(self) -> float:
+        """Link length with the base joints raised by T: l_o - T / sin(theta_L) (mm)."""
+        return self.link_length - self.offset_t / math.sin(self.theta)
+
     def joints(self) -> dict:
         """Joint positions (mm): A, B, C are the corners where the link lines meet."""
         b, H, L = self.b, self.height, self.peg_length
@@ -126,18 +131,24 @@ def approx_stiffness(device: Rcc, about_z: float = 0.0) -> np.ndarray:
     return a.T @ formula_stiffness(device) @ a
 
 
-def _motion(values) -> np.ndarray:
+def _six(values, names=DOFS) -> np.ndarray:
     values = np.asarray(values, dtype=float)
     if values.shape != (6,):
-        raise InputError(f"motion {values.tolist()}: expected 6 components {DOFS}")
+        raise InputError(f"{values.tolist()}: expected 6 components {names}")
     return values
+
+
+def _check_model(model: str) -> None:
+    if model not in MODELS:
+        raise InputError(f"model = {model!r}: expected one of {', '.join(MODELS)}")
 
 
 def wrench(device: Rcc, motion, about_z: float = 0.0, model: str = "exact") -> np.ndarray:
     """Load (Fx, Fy, Fz, Mx, My, Mz) holding the wrist moved by `motion` (x, y, z mm;
     rx, ry, rz rad) about (0, 0, DZ), moments about that point. Models: 'exact' (large
     motion), 'linear' (truss, small motion), 'approx' (reference formula)."""
-    motion = _motion(motion)
+    motion = _six(motion)
+    _check_model(model)
     if model == "approx":
         return approx_stiffness(device, about_z) @ motion
     truss, wrist = device.truss()
@@ -151,7 +162,8 @@ def wrench(device: Rcc, motion, about_z: float = 0.0, model: str = "exact") -> n
 def displacement(device: Rcc, load, about_z: float = 0.0, model: str = "exact") -> np.ndarray:
     """Motion (x, y, z, rx, ry, rz) of the point (0, 0, DZ) on the peg under a force
     (Fx, Fy, Fz, N) applied there (it moves with the peg) and a couple (Mx, My, Mz, N*mm)."""
-    load = _motion(load)
+    load = _six(load, WRENCH)
+    _check_model(model)
     if model == "approx":
         return np.linalg.solve(approx_stiffness(device, about_z), load)
     truss, wrist = device.truss()
@@ -168,15 +180,18 @@ def compliance_centre(device: Rcc, motion=None, load=None) -> dict:
     """Compliance centre on the peg axis from the truss tangent stiffness at an operating
     point (the unloaded device, a prescribed `motion` about the tip, or a `load` at the tip).
 
-    Returns {'z': position along the peg axis from the tip (mm, + toward the tip side),
+    Returns {'z': position along the peg axis from the tip (mm; > 0 beyond the tip, away
+    from the wrist),
     'coupling': the remaining lateral-translation/tilt coupling there relative to
     sqrt(K_lateral K_tilt) (0 for a true centre)}. The centre is the point p where the
     coupling blocks of A(p)^T K A(p) vanish, in the least-squares sense."""
     truss, wrist = device.truss()
     if motion is not None:
-        truss.prescribe(wrist, _motion(motion)[:3], _motion(motion)[3:])
+        motion = _six(motion)
+        truss.prescribe(wrist, motion[:3], motion[3:])
     if load is not None:
-        truss.load_rigid_set(wrist, _motion(load)[:3], _motion(load)[3:])
+        load = _six(load, WRENCH)
+        truss.load_rigid_set(wrist, load[:3], load[3:])
     state = truss.solve_exact()
     rot = np.kron(np.eye(2), state.rotations[wrist])
     k = rot.T @ truss.rigid_tangent(state, wrist) @ rot  # body axes, about the moved tip
@@ -198,7 +213,8 @@ SCHEMA = {
     "rcc": {
         "b": Field("float", 50.0, "base length b (mm)", positive=True),
         "peg_length": Field("float", 50.0, "peg length L: wrist plate to tip (mm)", min=0.0),
-        "theta_l": Field("float", 70.0, "link tilt theta_L from the base plate (deg)", positive=True, max=89.999),
+        "theta_l": Field("float", 70.0, "link tilt theta_L from the base plate (deg), in (0, 90)",
+                         check=lambda v: None if 0.0 < v < 90.0 else "must lie in (0, 90)"),
         "k": Field("float", 200.0, "axial stiffness of each link (N/mm)", positive=True),
         "offset_t": Field("float", 0.0, "base joints raised along their links by T (mm), < h", min=0.0),
     },
@@ -230,10 +246,9 @@ def run_case(scene: dict, case_dir) -> dict:
     motion = scene["motion"]
     about_z = motion["about_z"]
     design = formula_stiffness(device)
-    metrics = {"H": device.height, "h": device.h, "link_length": device.link_length,
-               "short_link_length": device.link_length - device.offset_t / math.sin(device.theta),
-               "motion_ratio": motion["translation"] / (device.link_length
-                                                      - device.offset_t / math.sin(device.theta))}
+    metrics = {"device_height": device.height, "link_height": device.h, "link_length": device.link_length,
+               "short_link_length": device.raised_link_length,
+               "motion_ratio": motion["translation"] / device.raised_link_length}
     errors = {}
     for i, dof in enumerate(DOFS):
         d = np.zeros(6)

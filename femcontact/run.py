@@ -21,6 +21,11 @@ def add_arguments(parser):
                         help="override a scene value, e.g. --set peg.insertion_depth=5")
     parser.add_argument("--out", default=None, help="case directory (default results/run/<case id>)")
     parser.add_argument("--quiet", action="store_true", help="no summary table")
+    parser.add_argument("--checkpoint", action="store_true",
+                        help="save the state after the last step in OUT/checkpoint/ (shared prefix of a study)")
+    parser.add_argument("--restart", default=None, metavar="CHECKPOINT",
+                        help="start from a checkpoint directory written by --checkpoint and run only the "
+                             "steps after the ones it holds")
 
 
 def write_json_atomic(path: Path, data) -> None:

@@ -107,7 +107,8 @@ STEP = {
 SOLVER = {
     "max_iterations": Field("int", 40, "Newton iterations per increment", min=1),
     "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
-    "atol": Field("float", 1e-9, "absolute residual tolerance (N)", positive=True),
+    "atol": Field("float", 1e-7, "absolute residual tolerance (N); the round-off floor of the contact "
+                  "residual is about eps * |x| * gamma E / h, ~1e-8 N for the default wedging mesh", positive=True),
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
     "line_search": Field("bool", True, "backtracking line search on the residual norm"),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",

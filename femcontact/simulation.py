@@ -15,6 +15,10 @@ from mpi4py import MPI
 from femcontact.errors import InputError
 
 
+STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 0.0)
+"""Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
+
+
 class SimulationFailed(RuntimeError):
     """The solver gave up on an increment after cutting it `max_cuts` times."""
 
@@ -53,6 +57,7 @@ class Simulation:
             weight[-1] = -self.problem.rigid.mass * scene["dynamics"]["gravity"]
         self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model, self.problem.rigid), weight)
         self.history: list[dict] = []
+        self.stabilized_increments = 0
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
@@ -102,7 +107,21 @@ class Simulation:
         p.set_time_step(load.dt)
         start = time.perf_counter()
         try:
-            iterations = self.newton.solve(load)
+            try:
+                iterations = self.newton.solve(load)
+            except NewtonFailure:
+                # stabilised predictor, then the exact equations from its solution
+                p.restore(state)
+                p.rigid.values[~free] = load.motion[~free]
+                p.rigid.sync()
+                iterations = 0
+                try:
+                    for factor in STABILIZATION_FACTORS:
+                        self.newton.stabilize(factor)
+                        iterations += self.newton.solve(load)
+                finally:
+                    self.newton.stabilize(0.0)
+                self.stabilized_increments += 1
         except NewtonFailure:
             p.restore(state)
             raise

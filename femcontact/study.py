@@ -110,6 +110,11 @@ class Case:
     dir: Path
     prefix: "Case | None" = None  # the shared-prefix computation it restarts from
 
+    @property
+    def is_prefix(self) -> bool:
+        """A shared prefix (results/NAME/prefix/ID), not a case of the study."""
+        return self.dir.parent.name == "prefix"
+
 
 @dataclass
 class Study:
@@ -326,7 +331,7 @@ class Runner:
         command = launcher + femcontact_command() + ["run", "scene.toml", "--out", ".", "--quiet"]
         if case.prefix is not None:
             command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
-        elif case.dir.parent.name == "prefix":
+        elif case.is_prefix:
             command += ["--checkpoint"]
         return command
 
@@ -409,7 +414,7 @@ class Runner:
                 self.start(case, free.pop(0))
                 self.progress.update(self.running)
             for case, result in self.poll():
-                if case.dir.parent.name == "prefix":
+                if case.is_prefix:
                     prefix_results[case.id] = result
                     self.progress.finished(case, result, prefix=True)
                 else:
@@ -444,7 +449,8 @@ def _write_json(path: Path, data) -> None:
 # -- progress -------------------------------------------------------------------------------------
 
 class Progress:
-    """A progress bar on a terminal, one line per finished case otherwise, nothing with --quiet."""
+    """On a terminal a progress bar (and a line per failure), otherwise a line per finished case;
+    nothing with --quiet."""
 
     def __init__(self, total: int, quiet: bool, stream=sys.stderr):
         self.total, self.quiet, self.stream = total, quiet, stream
@@ -457,7 +463,7 @@ class Progress:
         if not prefix:
             self.done += 1
             self.failed += result["status"] != "ok"
-        if self.quiet:
+        if self.quiet or (self.bar and result["status"] == "ok"):
             return
         what = f"prefix {case.id}" if prefix else f"{case.id} {_describe(case.params)}"
         line = f"[{self.done}/{self.total}] {result['status']:6s} {what}"
@@ -480,9 +486,14 @@ class Progress:
                           f"ETA {eta}\x1b[K")
         self.stream.flush()
 
+    def close(self) -> None:
+        """Leave the terminal's last line free for the summary."""
+        self._clear()
+
     def _clear(self) -> None:
         if self.bar:
             self.stream.write("\r\x1b[K")
+            self.stream.flush()
 
 
 def _duration(seconds: float) -> str:
@@ -542,13 +553,15 @@ def command(args) -> int:
     try:
         runner.run(todo, prefixes)
     except KeyboardInterrupt:
+        progress.close()
         runner.stop_all()
         database.export_csv(study.results / "results.csv")
-        print(f"\nstudy {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
+        print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
               "run the same command again to continue", file=sys.stderr)
         return 130
     finally:
         signal.signal(signal.SIGTERM, previous)
+    progress.close()
     database.export_csv(study.results / "results.csv")
     return _summary(study, progress.start)
 

@@ -36,13 +36,15 @@ def _generate_2d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     z = k * sz.h_contact
     if z >= w / 2:
         raise InputError(f"mesh.contact_zone: the fine zone |x| <= {z:.6g} must be narrower than the block")
-    vertices = [(-w / 2, -h), (w / 2, -h), (w / 2, 0.0), (z, 0.0), (-z, 0.0), (-w / 2, 0.0)]
-    edges = [("bottom", False), ("right", False), ("top", False), ("top", True), ("top", False), ("left", False)]
+    vertices = [(-w / 2, -h), (w / 2, -h), (w / 2, 0.0), (z, 0.0), (0.0, 0.0), (-z, 0.0), (-w / 2, 0.0)]
+    edges = [("bottom", False), ("right", False), ("top", False), ("top", True), ("top", True),
+             ("top", False), ("left", False)]
     surface, lines = gmsh_tools.polygon(vertices, edges)
     fine = [tag for _, is_fine, tag in lines if is_fine]
-    gmsh.model.geo.mesh.setTransfiniteCurve(fine[0], 2 * k + 1)
+    for tag in fine:  # x = 0 is a geometry vertex, so the node there is exact
+        gmsh.model.geo.mesh.setTransfiniteCurve(tag, k + 1)
     gmsh.model.geo.synchronize()
-    gmsh_tools.background(sz, [gmsh_tools.distance_threshold(sz, curves=fine, curve_length=2 * z)])
+    gmsh_tools.background([gmsh_tools.distance_threshold(sz, curves=fine, curve_length=z)])
     gmsh.option.setNumber("Mesh.Algorithm", 6)
     by_name = {}
     for name, _, tag in lines:
@@ -67,13 +69,10 @@ def _generate_3d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
                 (2, -h): "bottom", (2, 0.0): "top"}
         faces[next(v for (axis, value), v in name.items() if math.isclose(c[axis], value, abs_tol=1e-9 * w))] = [tag]
     lateral = "Abs(x)" if scene["indenter"]["shape"] == "cylinder" else "Sqrt(x^2+y^2)"
-    distance = f"Sqrt(Max(0, {lateral}-{sz.zone!r})^2+z^2)"
-    field = gmsh.model.mesh.field.add("MathEval")
-    gmsh.model.mesh.field.setString(
-        field, "F", f"Min({sz.max!r}, {sz.contact!r}+{gmsh_tools.GRADING!r}*{distance})")
-    gmsh_tools.background(sz, [field])
+    gmsh_tools.background([gmsh_tools.graded(sz, f"Sqrt(Max(0, {lateral}-{sz.zone!r})^2+z^2)")])
     cells = gmsh_tools.add_groups(3, {"block": [volume]})
     facets = gmsh_tools.add_groups(2, {n: faces[n] for n in ("top", "bottom", "left", "right", "front", "back")})
+    gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.45)  # optimise tetrahedra of quality below this
     gmsh.model.mesh.generate(3)
     return {"facets": facets, "cells": cells}
 

@@ -84,8 +84,8 @@ def add_groups(dim: int, entities: dict[str, list[int]], first: int = 1) -> dict
 
 
 def distance_threshold(sizes: Sizes, curves=(), surfaces=(), curve_length: float = 0.0) -> int:
-    """Size field: sizes.contact on the given curves/surfaces, growing linearly with the
-    distance to sizes.max (base sizes; see `background`). Curves are sampled at about a
+    """Size field: sizes.h_contact on the given curves/surfaces, growing linearly with the
+    distance to sizes.h_max over sizes.grading_distance. Curves are sampled at about a
     quarter of the contact size (`curve_length`: the longest curve)."""
     field = gmsh.model.mesh.field
     distance = field.add("Distance")
@@ -97,32 +97,37 @@ def distance_threshold(sizes: Sizes, curves=(), surfaces=(), curve_length: float
         field.setNumbers(distance, "SurfacesList", list(surfaces))
     threshold = field.add("Threshold")
     field.setNumber(threshold, "InField", distance)
-    field.setNumber(threshold, "SizeMin", sizes.contact)
-    field.setNumber(threshold, "SizeMax", sizes.max)
+    field.setNumber(threshold, "SizeMin", sizes.h_contact)
+    field.setNumber(threshold, "SizeMax", sizes.h_max)
     field.setNumber(threshold, "DistMin", 0.0)
     field.setNumber(threshold, "DistMax", sizes.grading_distance)
     return threshold
 
 
-def ball_size(sizes: Sizes, centre, radius: float) -> int:
-    """Size field: sizes.contact within `radius` of `centre` (x, y, z), growing linearly
-    with the distance beyond it to sizes.max (base sizes; see `background`)."""
-    x, y, z = centre
-    r = f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
-    expression = f"Min({sizes.max!r}, {sizes.contact!r}+{GRADING!r}*Max(0, {r}-{radius!r}))"
+def graded(sizes: Sizes, distance: str) -> int:
+    """MathEval size field: sizes.h_contact where the gmsh expression `distance` (mm) is 0,
+    growing linearly with it to sizes.h_max over sizes.grading_distance."""
+    slope = GRADING / sizes.resolution
+    expression = f"Min({sizes.h_max!r}, {sizes.h_contact!r}+{slope!r}*({distance}))"
     field = gmsh.model.mesh.field.add("MathEval")
     gmsh.model.mesh.field.setString(field, "F", expression)
     return field
 
 
-def background(sizes: Sizes, fields: list[int]) -> None:
-    """Use the minimum of `fields`, divided by sizes.resolution, as the only size source."""
+def ball_size(sizes: Sizes, centre, radius: float) -> int:
+    """Size field `graded` by the distance to the ball of `radius` (mm) around `centre`."""
+    x, y, z = centre
+    r = f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
+    return graded(sizes, f"Max(0, {r}-{radius!r})")
+
+
+def background(fields: list[int]) -> None:
+    """Use the minimum of the size `fields` as the only source of element sizes. (The fields
+    carry the resolution themselves: gmsh 4.8 can hang evaluating a MathEval of a field.)"""
     field = gmsh.model.mesh.field
     smallest = field.add("Min")
     field.setNumbers(smallest, "FieldsList", fields)
-    scaled = field.add("MathEval")
-    field.setString(scaled, "F", f"F{smallest}/{sizes.resolution!r}")
-    field.setAsBackgroundMesh(scaled)
+    field.setAsBackgroundMesh(smallest)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)

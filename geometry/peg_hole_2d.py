@@ -71,7 +71,8 @@ def _hole_outlines(scene: dict, sz: gmsh_tools.Sizes) -> dict[str, _Outline]:
     D, bw, depth, bt = hole["width"], hole["block_width"], hole["depth"], hole["bottom_thickness"]
     cw, h_c, zone = hole["chamfer_width"], chamfer_height(hole["chamfer_width"], hole["chamfer_angle"]), sz.zone
     y_tip = peg_pose(scene).points["contact_B"][1]
-    wall_fine = [(-h_c - zone, -h_c), (y_tip - zone, y_tip + zone)]
+    # the wall is split at y_tip so a mesh node sits where the peg's tip corner touches
+    wall_fine = [(-h_c - zone, -h_c), (y_tip - zone, y_tip), (y_tip, y_tip + zone)]
     outer = hole["support"] == "outer"
     h = sz.h_contact
 
@@ -150,7 +151,7 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
         surfaces["peg"] = [_peg_outline(scene, sz).surface(lines, fine)]
     gmsh.model.geo.synchronize()
     longest = max(_length(tag) for tag in fine)
-    gmsh_tools.background(sz, [gmsh_tools.distance_threshold(sz, curves=fine, curve_length=longest)])
+    gmsh_tools.background([gmsh_tools.distance_threshold(sz, curves=fine, curve_length=longest)])
     gmsh.option.setNumber("Mesh.Algorithm", 6)
     cells = gmsh_tools.add_groups(2, surfaces)
     facets = gmsh_tools.add_groups(1, {name: lines[name] for name in sorted(lines)})

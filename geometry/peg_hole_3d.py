@@ -72,7 +72,6 @@ def _peg(scene: dict) -> tuple[int, dict]:
     if cw > 0:
         parts.append((3, occ.addCone(0, 0, 0, 0, 0, h_p, d / 2 - cw, d / 2)))
         parts, _ = occ.fuse(parts[:1], parts[1:])
-        occ.removeAllDuplicates()
     # local z (the peg axis) -> (-sin(tilt), 0, cos(tilt)): rotation by -tilt about y
     occ.rotate(parts, 0, 0, 0, 0, 1, 0, -pose.tilt)
     occ.translate(parts, *pose.origin)
@@ -101,9 +100,10 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
         cell, supports = "peg", []
         contact = ["peg_side", "peg_tip", "peg_chamfer"]
     points = peg_pose(scene).points
-    gmsh_tools.background(sz, [gmsh_tools.ball_size(sz, points[name], sz.zone) for name in ("contact_A", "contact_B")])
+    gmsh_tools.background([gmsh_tools.ball_size(sz, points[name], sz.zone) for name in ("contact_A", "contact_B")])
     cells = gmsh_tools.add_groups(3, {cell: [volume]})
     facets = gmsh_tools.add_groups(2, faces)
+    gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.45)  # optimise tetrahedra of quality below this
     gmsh.model.mesh.generate(3)
     return {"facets": facets, "cells": cells, "contact_facets": [n for n in contact if n in facets],
             "supports": supports}

@@ -122,14 +122,14 @@ def test_expand_grid_times_zip_plus_cases():
 def test_study_validates_every_case_before_running(tmp_path, fake):
     path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, -1.0], "steps.1.force" = [[1.0, 2.0]] }\n'
                                 'zip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1, 2] }')
-    with pytest.raises(InputError, match=r"1 invalid.*contact.mu=-1.0.*contact.mu = -1.0: out of range"):
+    with pytest.raises(InputError, match=r"(?s)2 invalid case.*case contact.mu=-1.0, .*mesh.degree=2: contact.mu = -1.0: out of range"):
         load_study(path, results_root=tmp_path / "results")
     path.write_text(path.read_text().replace("-1.0", "0.3"))
     study = load_study(path, ["contact.theta=1"], results_root=tmp_path / "results")
     assert len(study.cases) == 4 and study.keys == ["contact.mu", "steps.1.force", "contact.gamma", "mesh.degree"]
     assert {case.scene["contact"]["theta"] for case in study.cases} == {1.0}
+    make_study(tmp_path, '[sweep]\nzip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1] }')
     with pytest.raises(InputError, match="zipped lists must have one length"):
-        make_study(tmp_path, '[sweep]\nzip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1] }')
         load_study(tmp_path / "demo.toml")
     assert fake() == {}
 
@@ -144,9 +144,8 @@ def test_failures_do_not_stop_the_sweep_and_csv_matches_database(tmp_path, fake,
     out = capsys.readouterr().out
     assert "4 cases, 2 ok, 2 failed" in out and "NewtonDiverged: no convergence at mu = 0.2" in out
     results = results_of(path)
-    by_mu = {json.loads(Path(path.parent, "results/demo/cases", i, "runner.json").read_text())["slot"] >= 0
-             and tomllib.loads(Path(path.parent, "results/demo/cases", i, "scene.toml").read_text())["contact"]["mu"]:
-             r for i, r in results.items()}
+    cases = path.parent / "results/demo/cases"
+    by_mu = {tomllib.loads((cases / i / "scene.toml").read_text())["contact"]["mu"]: r for i, r in results.items()}
     assert by_mu[0.1]["status"] == by_mu[0.4]["status"] == "ok"
     assert "exited with code 139 without a result; last log line: fake case: segmentation fault" \
         in by_mu[0.3]["reason"]
@@ -183,23 +182,29 @@ def test_resume_after_sigkill_recomputes_nothing(tmp_path, fake):
     command = [sys.executable, "-m", "femcontact.cli", "study", str(path), "--results", str(tmp_path / "results")]
     runner = subprocess.Popen(command, env=env, stderr=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
     deadline = time.monotonic() + 30
-    while len(results_of(path)) < 5 and time.monotonic() < deadline:
-        time.sleep(0.05)
+    while time.monotonic() < deadline:  # kill when >= 5 cases are done and one has just started (FAKE_SLEEP)
+        done = set(results_of(path))
+        started = [call.name.split(".")[0] for call in (tmp_path / "calls").iterdir()
+                   if time.time() - call.stat().st_mtime < 0.2]
+        interrupted = set(started) - done
+        if len(done) >= 5 and interrupted:
+            break
+        time.sleep(0.02)
     runner.send_signal(signal.SIGKILL)
     runner.wait()
-    time.sleep(0.5)  # the orphaned cases got SIGTERM (parent-death signal) and die without a result
     finished = set(results_of(path))
     assert 5 <= len(finished) < 20
     with sqlite3.connect(tmp_path / "results/demo/results.sqlite") as db:
         rows = db.execute("SELECT case_id, status FROM cases").fetchall()
     assert {case for case, _ in rows} <= finished and {status for _, status in rows} == {"ok"}
-    time.sleep(0.5)
-    assert set(results_of(path)) == finished  # nothing still running behind our back
+    time.sleep(1.0)  # > FAKE_SLEEP: the orphaned cases got SIGTERM (parent-death signal) and wrote nothing
+    assert set(results_of(path)) == finished
 
     assert subprocess.run(command + ["--quiet"], env=env, capture_output=True).returncode == 0
     counts = fake()
     assert len(results_of(path)) == 20 and set(counts) == set(results_of(path))
     assert all(counts[case] == 1 for case in finished)
+    assert interrupted and all(counts[case] == 2 for case in interrupted)  # killed mid-run, so run again
     with sqlite3.connect(tmp_path / "results/demo/results.sqlite") as db:
         assert db.execute("SELECT count(*), count(DISTINCT case_id) FROM cases").fetchone() == (20, 20)
 
@@ -231,6 +236,20 @@ def test_two_cases_on_two_mpi_ranks(tmp_path, fake, monkeypatch):
     assert len(results) == 2 and {r["info"]["ranks"] for r in results.values()} == {2}
     rows = Database(tmp_path / "results/demo/results.sqlite", ["contact.mu"]).rows()
     assert [row["ranks"] for row in rows] == [2, 2]
+
+
+def test_real_rcc_cases_on_two_mpi_ranks(tmp_path, fake, monkeypatch):
+    """End to end: the real `femcontact run` under a real `mpirun -n 2` (RCC cases: no FFCx, fast)."""
+    for name, value in (("OMPI_ALLOW_RUN_AS_ROOT", "1"), ("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1"),
+                        ("OMPI_MCA_rmaps_base_oversubscribe", "1")):
+        monkeypatch.setenv(name, value)
+    path = tmp_path / "rcc.toml"
+    path.write_text(f'[study]\nname = "rcc"\nscene = "{HERE.parent / "scenes/rcc.toml"}"\nranks_per_case = 2\n'
+                    'jobs = 1\n[sweep]\ngrid = { "rcc.theta_l" = [60.0, 70.0] }\n')
+    assert run_study(path) == 0
+    rows = Database(tmp_path / "results/rcc/results.sqlite", ["rcc.theta_l"]).rows()
+    assert [(row["rcc.theta_l"], row["status"], row["ranks"]) for row in rows] == [(60.0, "ok", 2), (70.0, "ok", 2)]
+    assert all(isinstance(row["max_rel_error"], float) for row in rows)
 
 
 def test_shared_prefix_runs_once_and_variants_restart_from_it(tmp_path, fake):
