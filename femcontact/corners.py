@@ -62,10 +62,6 @@ class RigidCorners:
         return np.array(rows, dtype=np.int32).reshape(-1, 3)
 
     # -- the element ------------------------------------------------------------------
-    def _positions(self, u: np.ndarray, segment) -> np.ndarray:
-        x = self.coordinates[segment] + u.reshape(-1, 2)[segment]
-        return x
-
     def _force(self, k: int, corner: np.ndarray, xa, xb, xc, s_fixed=None, state=None):
         """Force on the rigid corner (N) and the segment parameter for one corner."""
         p = self.problem
@@ -96,16 +92,17 @@ class RigidCorners:
 
     def _find(self, corner: np.ndarray, u: np.ndarray):
         """Best segment on this rank: (distance, row) with the corner projecting inside it."""
-        best = (np.inf, -1)
-        for row, (a, b, c) in enumerate(self.segments):
-            xa, xb = self.coordinates[a] + u[2 * a: 2 * a + 2], self.coordinates[b] + u[2 * b: 2 * b + 2]
-            edge = xb - xa
-            t = (corner - xa) @ edge / (edge @ edge)
-            if -1e-9 <= t <= 1 + 1e-9:
-                distance = abs(np.cross(edge, corner - xa)) / np.linalg.norm(edge)
-                if distance < min(best[0], self.search):
-                    best = (distance, row)
-        return best
+        if not len(self.segments):
+            return np.inf, -1
+        x = self.coordinates + u.reshape(-1, 2)
+        xa, xb = x[self.segments[:, 0]], x[self.segments[:, 1]]
+        edge = xb - xa
+        length2 = np.einsum("ij,ij->i", edge, edge)
+        t = np.einsum("ij,ij->i", corner - xa, edge) / length2
+        distance = np.abs(np.cross(edge, corner - xa)) / np.sqrt(length2)
+        distance[(t < -1e-9) | (t > 1 + 1e-9) | (distance > self.search)] = np.inf
+        row = int(np.argmin(distance))
+        return (float(distance[row]), row) if np.isfinite(distance[row]) else (np.inf, -1)
 
     def contributions(self, with_jacobian: bool):
         """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.study import _flatten, get_key, load_study
+from femcontact.study import flatten, get_key, load_study
 
 
 def add_arguments(parser):
@@ -103,7 +103,7 @@ def write_snapshots(study, rows: dict) -> list[Path]:
 
     settings, paths = study.snapshots, []
     for case in study.cases:
-        if not any(_matches(case.scene, _flatten(selector)) for selector in settings["select"]):
+        if not any(_matches(case.scene, flatten(selector)) for selector in settings["select"]):
             continue
         if case.id not in rows or rows[case.id]["status"] != "ok":
             print(f"  (no snapshot of {case.id}: no ok result)", file=sys.stderr)

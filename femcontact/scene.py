@@ -35,7 +35,8 @@ PEG = {
     "placement": Field("str", "two_point", "'two_point': tilt theta(l_d) touching both walls (less `gap`); "
                        "'centred': axis through the hole centre at `tilt`", choices=("two_point", "centred")),
     "tilt": Field("float", 0.0, "tilt (deg, counter-clockwise) for placement 'centred'", min=-89.0, max=89.0),
-    "gap": Field("float", 0.0, "normal gap (mm) left at both contact points for placement 'two_point'", min=0.0),
+    "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
+                 min=0.0),
     "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
     "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
     "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
@@ -107,8 +108,9 @@ STEP = {
 SOLVER = {
     "max_iterations": Field("int", 40, "Newton iterations per increment", min=1),
     "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
-    "atol": Field("float", 1e-7, "absolute residual tolerance (N); the round-off floor of the contact "
-                  "residual is about eps * |x| * gamma E / h, ~1e-8 N for the default wedging mesh", positive=True),
+    "atol": Field("float", 1e-6, "absolute residual tolerance (N); the round-off floor of the contact "
+                  "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
+                  positive=True),
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
     "line_search": Field("bool", True, "backtracking line search on the residual norm"),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
@@ -151,7 +153,10 @@ def contact_schema(dim: int, geometry: str) -> dict:
         "outputs": OUTPUTS,
     }
     if geometry == "peg_in_hole":
-        schema.update(peg=PEG, hole=HOLE, materials={"peg": _material(), "hole": _material()})
+        hole = dict(HOLE)
+        if dim == 3:
+            hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
+        schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
     return schema
@@ -190,7 +195,9 @@ def resolve(data: dict, overrides=()) -> dict:
     if kind == "rcc":
         from femcontact import rcc
 
-        return validate(data, rcc.SCHEMA)
+        scene = validate(data, rcc.SCHEMA)
+        rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running
+        return scene
     if kind != "contact":
         raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc'")
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},

@@ -15,7 +15,7 @@ from mpi4py import MPI
 from femcontact.errors import InputError
 
 
-STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 0.0)
+STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
 
 
@@ -58,6 +58,7 @@ class Simulation:
         self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model, self.problem.rigid), weight)
         self.history: list[dict] = []
         self.stabilized_increments = 0
+        self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
@@ -90,7 +91,7 @@ class Simulation:
                 continue
             t += dt
             start = time.perf_counter()
-            self.history.append(self.recorder.row(load, iterations))
+            self.history.append({**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force})
             self.timings["output"] += time.perf_counter() - start
             if cuts and iterations < 8:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
@@ -107,27 +108,46 @@ class Simulation:
         p.set_time_step(load.dt)
         start = time.perf_counter()
         try:
+            self.stabilization_force = 0.0
             try:
                 iterations = self.newton.solve(load)
             except NewtonFailure:
-                # stabilised predictor, then the exact equations from its solution
                 p.restore(state)
                 p.rigid.values[~free] = load.motion[~free]
                 p.rigid.sync()
-                iterations = 0
-                try:
-                    for factor in STABILIZATION_FACTORS:
-                        self.newton.stabilize(factor)
-                        iterations += self.newton.solve(load)
-                finally:
-                    self.newton.stabilize(0.0)
-                self.stabilized_increments += 1
+                iterations = self.stabilized_solve(load)
         except NewtonFailure:
             p.restore(state)
             raise
         finally:
             self.timings["solve"] += time.perf_counter() - start
         p.commit(load.dt)
+        return iterations
+
+    def stabilized_solve(self, load) -> int:
+        """Continuation in the contact stabilisation down to zero. If the exact equations
+        (last factor) still fail, as for a body left in neutral equilibrium with vanishing
+        contact forces, the solution of the smallest factor that converged is kept and its
+        stabilisation force (N) is reported in the history."""
+        from femcontact.newton import NewtonFailure
+
+        p, iterations, accepted = self.problem, 0, None
+        self.stabilized_increments += 1
+        try:
+            for factor in STABILIZATION_FACTORS:
+                self.newton.stabilize(factor)
+                try:
+                    iterations += self.newton.solve(load)
+                except NewtonFailure:
+                    if accepted is None:
+                        raise
+                    p.restore(accepted)
+                    break
+                accepted = p.state()
+                force = self.newton.stabilization @ (p.rigid.values - p.rigid.r_old.value)
+                self.stabilization_force = float(np.linalg.norm(force[: p.dim]))
+        finally:
+            self.newton.stabilize(0.0)
         return iterations
 
     def write_history(self, path: Path) -> None:

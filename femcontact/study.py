@@ -78,12 +78,12 @@ SCHEMA = {
 }
 
 
-def _flatten(table: dict, prefix: str = "") -> dict:
+def flatten(table: dict, prefix: str = "") -> dict:
     """{'peg': {'width': 1}} -> {'peg.width': 1} (TOML turns unquoted dotted keys into sub-tables)."""
     flat = {}
     for key, value in table.items():
         if isinstance(value, dict):
-            flat.update(_flatten(value, f"{prefix}{key}."))
+            flat.update(flatten(value, f"{prefix}{key}."))
         else:
             flat[prefix + key] = value
     return flat
@@ -92,7 +92,7 @@ def _flatten(table: dict, prefix: str = "") -> dict:
 def _check_lists(table, same_length: bool) -> str | None:
     if not isinstance(table, dict):
         return "must be a table of key = [values]"
-    lists = _flatten(table)
+    lists = flatten(table)
     bad = [key for key, values in lists.items() if not isinstance(values, list) or not values]
     if bad:
         return f"{bad[0]} must be a non-empty list of values"
@@ -149,8 +149,8 @@ def expand(sweep: dict) -> list[dict]:
     """Parameter sets of a sweep: grid (product) x zip (together), then the explicit cases.
 
     An empty sweep is the base scene alone."""
-    grid, zipped = _flatten(sweep.get("grid", {})), _flatten(sweep.get("zip", {}))
-    explicit = [_flatten(case) for case in sweep.get("cases", [])]
+    grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
+    explicit = [flatten(case) for case in sweep.get("cases", [])]
     if not grid and not zipped:
         return explicit or [{}]
     grid_sets = [dict(zip(grid, values)) for values in itertools.product(*grid.values())]
@@ -167,7 +167,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         raise InputError(f"{path}: {error}") from None
     settings = raw["study"]
     base = read_toml(path.parent / settings["scene"])
-    for key, value in _flatten(raw["scene"]).items():
+    for key, value in flatten(raw["scene"]).items():
         set_key(base, key, value)
     for text in overrides:  # --set changes the base scene; the sweep still varies its own keys
         set_key(base, *parse_assignment(text))

@@ -76,7 +76,7 @@ def _tip_corner(peg: dict) -> tuple[np.ndarray, float]:
 def _two_point_depth(scene: dict) -> tuple[float, float, float, float]:
     """Effective (d, D, l) for analytic.tilt_two_point, and the smallest insertion depth (mm)."""
     peg, hole = scene["peg"], scene["hole"]
-    (xi_b, eta_b), r = _tip_corner(peg)
+    (_, eta_b), r = _tip_corner(peg)
     d_eff = peg["width"] - r
     D_eff = hole["width"] - 2 * peg["gap"] - r
     l_eff = peg["insertion_depth"] - eta_b

@@ -1,0 +1,32 @@
+"""The gmsh model built on rank 0 is distributed: run with `mpirun -n 2 python -m pytest tests/mpi`."""
+import pytest
+from mpi4py import MPI
+
+from femcontact.scene import resolve
+from geometry import measures
+from geometry.model import build
+
+pytestmark = pytest.mark.mpi
+
+SCENE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10, "insertion_depth": 5},
+         "hole": {"width": 40.1, "kind": "single", "chamfer_width": 1.0}, "steps": [{"name": "load"}]}
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_mesh_is_distributed(dim):
+    world = MPI.COMM_WORLD
+    scene = resolve({**SCENE, "dim": dim, "mesh": {"resolution": 1.0 if dim == 2 else 0.3}})
+    model = build(scene, world)
+    serial = build(scene, MPI.COMM_SELF)  # the same mesh, whole on every rank
+    tdim = model.mesh.topology.dim
+    owned = model.mesh.topology.index_map(tdim).size_local
+    assert owned > 0
+    assert world.allreduce(owned) == serial.mesh.topology.index_map(tdim).size_local
+    if world.size > 1:
+        assert owned < serial.mesh.topology.index_map(tdim).size_local
+    assert measures.measure(model) == pytest.approx(measures.measure(serial), rel=1e-12)
+    assert model.facets == serial.facets and model.cells == serial.cells
+    for name in model.facets:
+        assert measures.measure(model, facet=name) == pytest.approx(measures.measure(serial, facet=name), rel=1e-12)
+    for name in model.cells:
+        assert measures.measure(model, cell=name) == pytest.approx(measures.measure(serial, cell=name), rel=1e-12)
