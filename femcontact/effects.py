@@ -49,7 +49,9 @@ def add_contact(problem) -> None:
     p_sigma = ufl.dot(traction_sigma, normal)
     gamma_n = c["gamma"] * c["E"] / ufl.CellDiameter(problem.mesh)
     trial = p_sigma - gamma_n * gap if problem.scene["contact"]["method"] == "nitsche" else -gamma_n * gap
-    pressure = ufl.max_value(trial, 0)
+    # [trial]_+ with the kink counted as active, so a body touching with zero force
+    # already gets the contact stiffness in Newton's first iteration
+    pressure = ufl.conditional(ufl.ge(trial, 0), trial, 0.0)
     problem.xi, problem.gap, problem.normal, problem.normal_local = xi, gap, normal, normal_local
     problem.traction_sigma, problem.p_sigma, problem.pressure = traction_sigma, p_sigma, pressure
     problem.traction = pressure * normal

@@ -55,7 +55,8 @@ def write_fields(simulation, case_dir: Path) -> None:
             displacement=np.vstack([g[2] for g in gathered]),
             von_mises=np.concatenate([g[3] for g in gathered]),
             rigid_outline=shape_outline,
-            points_named=np.array(list(p.model.points)),
+            named_point_names=np.array(list(p.model.points)),
+            named_point_coords=np.array([np.r_[x, np.zeros(3 - p.dim)] for x in p.model.points.values()]),
         )
     if p.scene["outputs"]["fields"]:
         from dolfinx.io import XDMFFile

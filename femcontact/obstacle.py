@@ -15,13 +15,16 @@ from femcontact.errors import InputError
 def _box(q, radius, tiny):
     """Signed distance to a box given q = |xi| - half_sizes (rounded by `radius`).
 
-    The outside part sqrt(sum max(q,0)^2) is regularised by `tiny` (mm) so that its
-    derivative stays finite inside the box, where it is multiplied by zero."""
+    Written with an explicit inside/outside branch so that a point exactly on a face
+    (q_i = 0) gets that face's normal as gradient; the outside part is regularised by
+    `tiny` (mm) so its derivative stays finite on the edges of the branch."""
     outside = ufl.sqrt(sum(ufl.max_value(qi, 0) ** 2 for qi in q) + tiny ** 2) - tiny
     inside = q[0]
+    is_outside = ufl.gt(q[0], 0)
     for qi in q[1:]:
         inside = ufl.max_value(inside, qi)
-    return outside + ufl.min_value(inside, 0) - radius
+        is_outside = ufl.Or(is_outside, ufl.gt(qi, 0))
+    return ufl.conditional(is_outside, outside, inside) - radius
 
 
 def reference_point(rigid: dict) -> np.ndarray:
@@ -38,7 +41,7 @@ def signed_distance(rigid: dict, xi):
     (relative to the reference point), as a UFL expression. Sizes may be Constants;
     `rigid["scale"]` is a float size (mm) used for regularisation."""
     shape = rigid["shape"]
-    tiny = 1e-9 * max(rigid["scale"], 1.0)
+    tiny = 1e-15 * max(rigid["scale"], 1.0)
     if shape == "rectangle":
         r = rigid["corner_radius"]
         q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]

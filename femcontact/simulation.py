@@ -81,7 +81,7 @@ class Simulation:
             dt = min(dt, step["duration"] - t)
             load = self.schedule.load(index, t + dt, dt)
             try:
-                iterations = self.increment(load)
+                self.history.append(self.increment(load))
             except (RuntimeError, FloatingPointError) as error:
                 if cuts >= max_cuts:
                     raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
@@ -90,14 +90,12 @@ class Simulation:
                 dt /= 2
                 continue
             t += dt
-            start = time.perf_counter()
-            self.history.append({**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force})
-            self.timings["output"] += time.perf_counter() - start
-            if cuts and iterations < 8:
+            if cuts and self.history[-1]["newton_iterations"] < 8:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
 
-    def increment(self, load) -> int:
-        """Solve one increment from the last converged state; restore it on failure."""
+    def increment(self, load) -> dict:
+        """Solve one increment from the last converged state (restored on failure);
+        returns its output row, computed before the history moves on."""
         from femcontact.newton import NewtonFailure
 
         p = self.problem
@@ -121,8 +119,11 @@ class Simulation:
             raise
         finally:
             self.timings["solve"] += time.perf_counter() - start
+        start = time.perf_counter()
+        row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
+        self.timings["output"] += time.perf_counter() - start
         p.commit(load.dt)
-        return iterations
+        return row
 
     def stabilized_solve(self, load) -> int:
         """Continuation in the contact stabilisation down to zero. If the exact equations
