@@ -41,7 +41,7 @@ def signed_distance(rigid: dict, xi):
     (relative to the reference point), as a UFL expression. Sizes may be Constants;
     `rigid["scale"]` is a float size (mm) used for regularisation."""
     shape = rigid["shape"]
-    tiny = 1e-15 * max(rigid["scale"], 1.0)
+    tiny = 1e-15 * 10.0 ** round(np.log10(max(rigid["scale"], 1.0)))  # a decade, so it rarely changes the form
     if shape == "rectangle":
         r = rigid["corner_radius"]
         q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]

@@ -63,6 +63,8 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    if spec["kind"] == "wedge_map":
+        return write_wedge_map(spec, rows, results)
     x, y, series = spec["x"], spec["y"], spec["series"]
     groups: dict = {}
     for row in rows:
@@ -91,6 +93,102 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
+
+
+def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
+    """Simulated wedged / not wedged (filled circle / cross; green when it agrees with the analytic
+    condition l_crit <= l_d <= mu d, red when not) in the plane of two columns, with the analytic
+    bounds drawn: x = 1 and y = 1 for the normalised map (depth_over_l_crit, depth_over_l_max);
+    for y = peg.insertion_depth against clearance_ratio or contact.mu, the curves l_crit and
+    l_max = mu d for the most common peg width (other widths are left out), one per value of the
+    parameter not on the axis. Needs the metrics `wedged` and `analytic_wedged` (femcontact.wedging)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    x, y = spec["x"], spec["y"]
+    points = []
+    for row in rows:
+        if row["status"] != "ok":
+            continue
+        xv, yv, wedged, analytic = column(row, x), column(row, y), column(row, "wedged"), column(row, "analytic_wedged")
+        if all(isinstance(v, (int, float)) for v in (xv, yv, wedged, analytic)) and math.isfinite(yv):
+            points.append((xv, yv, bool(wedged), bool(analytic), row))
+    physical = y == "peg.insertion_depth" and x in ("clearance_ratio", "contact.mu")
+    if physical and points:
+        widths = [column(p[4], "peg.width") for p in points]
+        d = max(set(widths), key=widths.count)
+        points = [p for p, w in zip(points, widths) if w == d]
+    if rows and not points:
+        raise InputError(f"[[plot]] wedge_map {y} against {x}: no ok case has numbers for both and the metrics "
+                         "wedged, analytic_wedged")
+    figure, axes = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    for wedged, marker, label in ((True, "o", "simulated: wedged"), (False, "x", "simulated: not wedged")):
+        for agree, colour in ((True, "tab:green"), (False, "tab:red")):
+            chosen = [(p[0], p[1]) for p in points if p[2] == wedged and (p[2] == p[3]) == agree]
+            if chosen:
+                axes.plot(*zip(*chosen), marker, color=colour, markersize=7, linestyle="none",
+                          label=f"{label} ({'agrees' if agree else 'disagrees'})")
+    if x == "depth_over_l_crit" or y == "depth_over_l_max":
+        if x == "depth_over_l_crit":
+            axes.axvline(1.0, color="k", linestyle="--", label="l_d = l_crit")
+        if y == "depth_over_l_max":
+            axes.axhline(1.0, color="k", linestyle=":", label="l_d = mu d")
+    elif physical and points:
+        xs = np.array([p[0] for p in points])
+        grid = np.linspace(0.0 if x == "clearance_ratio" else 0.0, xs.max() * 1.15, 200)[1:]
+        if x == "clearance_ratio":
+            axes.plot(grid, d * np.sqrt(1 / (1 - grid) ** 2 - 1), "k--", label="l_crit(c)")
+            for mu in sorted({column(p[4], "contact.mu") for p in points}):
+                axes.axhline(mu * d, color="k", linestyle=":", label=f"l_max = mu d (mu = {mu:g})")
+        else:
+            axes.plot(grid, grid * d, "k:", label="l_max = mu d")
+            for D in sorted({column(p[4], "hole.width") for p in points}):
+                axes.axhline(math.sqrt(D * D - d * d), color="k", linestyle="--", label=f"l_crit (D = {D:g})")
+        axes.set_ylim(0, max(p[1] for p in points) * 1.15)
+    agree = sum(p[2] == p[3] for p in points)
+    axes.set(xlabel=x, ylabel=y, title=(spec["title"] or f"wedge map: {y} against {x}")
+             + f"\nagreement with the analytic condition: {agree}/{len(points)}",
+             xscale="log" if spec["logx"] else "linear", yscale="log" if spec["logy"] else "linear")
+    axes.grid(True, alpha=0.3)
+    axes.legend(fontsize=7)
+    path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
+
+
+def wedge_table(rows: list[dict]) -> list[str]:
+    """Markdown lines: agreement of the simulated `wedged` with `analytic_wedged`, overall, away from
+    the bounds and near them (`near_boundary`), and the disagreeing cases. Empty without those metrics."""
+    cases = [row for row in rows if row["status"] == "ok"
+             and isinstance(column(row, "wedged"), (int, float)) and isinstance(column(row, "analytic_wedged"), (int, float))]
+    if not cases:
+        return []
+
+    def rate(subset):
+        n = len(subset)
+        k = sum(bool(column(r, "wedged")) == bool(column(r, "analytic_wedged")) for r in subset)
+        return f"{k}/{n}" + (f" ({100 * k / n:.0f} %)" if n else "")
+
+    near = [r for r in cases if column(r, "near_boundary")]
+    far = [r for r in cases if not column(r, "near_boundary")]
+    lines = ["## Wedge map: simulated against l_crit <= l_d <= mu d", "",
+             "| cases | agree |", "|---|---|", f"| all | {rate(cases)} |",
+             f"| away from the bounds | {rate(far)} |", f"| near a bound (within 5 % of mu d) | {rate(near)} |", ""]
+    wrong = [r for r in cases if bool(column(r, "wedged")) != bool(column(r, "analytic_wedged"))]
+    if wrong:
+        lines += ["Disagreements:", "", "| case | d | D | mu | l_d | l_crit | l_max | simulated | reason | residual A |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in wrong:
+            lines.append("| " + " | ".join(_cell(v) for v in (
+                r["case_id"], column(r, "peg.width"), column(r, "hole.width"), column(r, "contact.mu"),
+                column(r, "peg.insertion_depth"), column(r, "l_crit"), column(r, "l_max"),
+                bool(column(r, "wedged")), column(r, "wedge_reason"), column(r, "residual_force_A"))) + " |")
+        lines.append("")
+    return lines
 
 
 def _label(value) -> str:
@@ -143,6 +241,7 @@ def write_summary(study, columns: list[str], rows: list[dict], plots, snapshots)
                   f"python {rows[0].get('python')}.", "",
                   "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
         lines += ["| " + " | ".join(_cell(row.get(c)) for c in shown) + " |" for row in rows]
+    lines += [""] + wedge_table(rows)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots]
     lines += [""] + [f"![{p.stem}](snapshots/{p.name})" for p in snapshots]
     path = study.results / "summary.md"

@@ -51,6 +51,9 @@ class RigidBody:
         self.modes = [modes[name] for name in self.names]
         self.Q0 = np.asarray(rigid["rotation"], dtype=float)
         self.p0 = np.asarray(rigid["origin"], dtype=float) + self.Q0 @ reference_point(rigid)
+        # the initial pose enters the forms as Constants: a sweep of placements reuses them
+        self.Q0_constant = fem.Constant(mesh, self.Q0)
+        self.p0_constant = fem.Constant(mesh, self.p0)
         self.values = np.zeros(len(self.names))
         self.r = fem.Constant(mesh, self.values.copy())
         self.r_old = fem.Constant(mesh, self.values.copy())
@@ -71,13 +74,12 @@ class RigidBody:
         """Shape-frame coordinates of spatial points x for the UFL pose r."""
         t, angles = self.split(r)
         R = rotation_ufl(angles)
-        Q0 = ufl.as_matrix(self.Q0.tolist())
-        return Q0.T * R.T * (x - ufl.as_vector(self.p0.tolist()) - ufl.as_vector(t))
+        return self.Q0_constant.T * R.T * (x - self.p0_constant - ufl.as_vector(t))
 
     def to_global_direction(self, a, r):
         """Rotate a shape-frame vector a into the spatial frame (UFL)."""
         _, angles = self.split(r)
-        return rotation_ufl(angles) * ufl.as_matrix(self.Q0.tolist()) * a
+        return rotation_ufl(angles) * self.Q0_constant * a
 
     def reference_point(self, values=None) -> np.ndarray:
         """Current reference point (mm)."""

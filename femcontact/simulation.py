@@ -17,6 +17,8 @@ from femcontact.errors import InputError
 
 STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
+STABILIZATION_TOLERANCE = 1e-3
+"""Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
 
 
 class SimulationFailed(RuntimeError):
@@ -57,6 +59,9 @@ class Simulation:
             weight[-1] = -self.problem.rigid.mass * scene["dynamics"]["gravity"]
         self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model, self.problem.rigid), weight)
         self.history: list[dict] = []
+        size = self.problem.shape["scale"]
+        self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
+                              for step in scene["steps"]] + [np.linalg.norm(weight), 1e-300])
         self.stabilized_increments = 0
         self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
@@ -90,7 +95,7 @@ class Simulation:
                 dt /= 2
                 continue
             t += dt
-            if cuts and self.history[-1]["newton_iterations"] < 8:
+            if cuts and self.history[-1]["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
 
     def increment(self, load) -> dict:
@@ -140,7 +145,7 @@ class Simulation:
                 try:
                     iterations += self.newton.solve(load)
                 except NewtonFailure:
-                    if accepted is None:
+                    if accepted is None or self.stabilization_force > STABILIZATION_TOLERANCE * self.peak_load:
                         raise
                     p.restore(accepted)
                     break

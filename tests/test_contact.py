@@ -1,0 +1,183 @@
+"""Verification of the contact solver against analytic solutions, equilibrium and hard cases.
+
+Meshes are coarse; tolerances follow from the discretisation error measured on them
+(Hertz: first-order in the contact-zone size h_c) or from the solver tolerance
+(equilibrium: the residual tolerance 1e-6 N against loads of 5-1000 N).
+"""
+import math
+
+import numpy as np
+import pytest
+
+from femcontact import hertz
+from femcontact.scene import resolve
+from femcontact.simulation import Simulation
+
+
+def simulate(data: dict) -> Simulation:
+    simulation = Simulation(resolve(data))
+    simulation.run()
+    return simulation
+
+
+def wedging(**overrides) -> dict:
+    """The thesis wedging scene (reference §1) on a coarse mesh."""
+    data = {
+        "name": "wedging", "dim": 2, "geometry": "peg_in_hole", "rigid": "peg", "effects": ["friction", "plane_strain"],
+        "peg": {"width": 40.0, "length": 10.0, "insertion_depth": 5.0},
+        "hole": {"width": 40.1, "depth": 20.0, "block_width": 20.0},
+        "materials": {"hole": {"E": 193000.0, "nu": 0.27}}, "contact": {"mu": 0.2}, "mesh": {"resolution": 0.5},
+        "steps": [{"name": "load", "increments": 4, "force": [-5.0, 1.0]}, {"name": "release", "increments": 4}],
+    }
+    for key, value in overrides.items():
+        section, _, name = key.partition(".")
+        data.setdefault(section, {})[name] = value
+    return data
+
+
+def finite(simulation) -> bool:
+    """Pose, reactions, contact forces, energy and stress are finite in every increment
+    (a contact zone's centre is NaN by design while it carries no force)."""
+    keys = [k for k in simulation.history[0] if k.startswith(("rigid_", "reaction_", "elastic", "max_"))
+            or k.endswith(("_Fx", "_Fy", "_force"))]
+    return all(np.isfinite(row[k]) for row in simulation.history for k in keys)
+
+
+# -- Hertz ----------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def hertz_levels():
+    """Contact sizes a/2.5, a/5.5, a/10.5: x = a falls mid-element on each level."""
+    a, _ = hertz.analytic(500.0, 50.0, 200000.0, 0.3)
+    return [hertz.run(a / (k + 0.5)) for k in (2, 5, 10)]
+
+
+def test_hertz_within_two_percent_on_finest_mesh(hertz_levels):
+    finest = hertz_levels[-1]
+    assert abs(finest["error_a"]) < 0.02
+    assert abs(finest["error_p0"]) < 0.02
+
+
+def test_hertz_errors_fall_under_refinement(hertz_levels):
+    errors_a = [abs(level["error_a"]) for level in hertz_levels]
+    errors_p0 = [abs(level["error_p0"]) for level in hertz_levels]
+    assert errors_a == sorted(errors_a, reverse=True) and errors_a[0] > 2 * errors_a[-1]
+    assert errors_p0 == sorted(errors_p0, reverse=True) and errors_p0[0] > 2 * errors_p0[-1]
+
+
+def test_hertz_does_not_depend_on_nitsche_parameter():
+    """gamma over a decade (10 -> 100) changes a and p0 by less than 1 % (Nitsche is consistent)."""
+    a, _ = hertz.analytic(500.0, 50.0, 200000.0, 0.3)
+    low, high = (hertz.run(a / 5.5, gamma=gamma) for gamma in (10.0, 100.0))
+    assert abs(low["a"] / high["a"] - 1) < 0.01
+    assert abs(low["p0"] / high["p0"] - 1) < 0.01
+
+
+def test_hertz_reaction_balances_load():
+    simulation = Simulation(hertz.scene(0.1))
+    simulation.run()
+    assert simulation.history[-1]["reaction_bottom_y"] == pytest.approx(500.0, rel=1e-6)
+
+
+# -- Coulomb friction -----------------------------------------------------------------------
+
+MU, PRESS = 0.3, 1000.0
+
+
+@pytest.fixture(scope="module")
+def friction_block():
+    """A block pressed by a rigid flat (wider than it), then dragged and dragged back."""
+    press = {"force": [0.0, -PRESS], "load_point": "indenter"}
+    return simulate({
+        "name": "friction_block", "dim": 2, "geometry": "block", "rigid": "indenter",
+        "effects": ["friction", "plane_strain"], "block": {"width": 20.0, "height": 10.0},
+        "indenter": {"shape": "flat", "width": 40.0}, "materials": {"block": {"E": 200000.0, "nu": 0.3}},
+        "mesh": {"contact_size": 0.5, "contact_zone": 9.0, "size_max": 2.0}, "contact": {"mu": MU},
+        "rigid_body": {"dofs": {"x": "prescribed", "rz": "held"}},
+        "steps": [{"name": "press", "increments": 2, **press},
+                  {"name": "stick", "increments": 2, **press, "motion": {"x": 1e-5}},
+                  {"name": "slide", "increments": 4, **press, "motion": {"x": 0.05}},
+                  {"name": "back", "increments": 4, **press, "motion": {"x": -0.05}}],
+    })
+
+
+def test_block_sticks_below_mu_n(friction_block):
+    row = friction_block.step_end_rows()["stick"]
+    assert 0 < abs(row["contact_top_Fx"]) < 0.1 * MU * PRESS
+    assert row["stick_nodes"] > row["slip_nodes"]
+
+
+def test_block_slides_at_mu_n(friction_block):
+    row = friction_block.step_end_rows()["slide"]
+    assert row["contact_top_Fx"] == pytest.approx(MU * PRESS, rel=0.01)
+    assert row["stick_nodes"] == 0
+
+
+def test_reversed_push_reverses_friction(friction_block):
+    row = friction_block.step_end_rows()["back"]
+    assert row["contact_top_Fx"] == pytest.approx(-MU * PRESS, rel=0.01)
+
+
+# -- equilibrium and the hard cases ---------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def wedged():
+    return simulate(wedging())
+
+
+def test_support_reactions_balance_load_on_peg(wedged):
+    row = wedged.step_end_rows()["load"]
+    total = np.array([row["reaction_support_A_x"] + row["reaction_support_B_x"],
+                      row["reaction_support_A_y"] + row["reaction_support_B_y"]])
+    applied = np.array([row["applied_Fx"], row["applied_Fy"]])
+    assert np.linalg.norm(total + applied) / np.linalg.norm(applied) < 1e-6
+
+
+def test_release_leaves_balanced_wedge(wedged):
+    row = wedged.step_end_rows()["release"]
+    assert row["applied_Fx"] == 0 and row["applied_Fy"] == 0
+    assert row["reaction_support_A"] > 1.0
+    assert abs(row["reaction_support_A_x"] + row["reaction_support_B_x"]) < 1e-6
+    assert row["stabilization_force"] == 0.0
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("mu = 0.5", {"contact.mu": 0.5}),
+    ("clearance ratio 1e-4", {"peg.width": 50.0, "hole.width": 50.005, "peg.insertion_depth": 2.0}),
+    ("nearly incompressible", {"materials.hole": {"E": 193000.0, "nu": 0.49}}),
+])
+def test_hard_wedging_cases_converge(name, overrides):
+    data = wedging()
+    for key, value in overrides.items():
+        section, _, field = key.partition(".")
+        if isinstance(value, dict):
+            data["materials"]["hole"] = value
+        else:
+            data[section][field] = value
+    simulation = simulate(data)
+    assert finite(simulation)
+    assert simulation.history[-1]["time"] == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("load", [1e-3, 5e4])
+def test_very_small_and_very_large_single_load_steps(load):
+    simulation = Simulation(hertz.scene(0.1, P=load, increments=1))
+    simulation.run()
+    assert finite(simulation)
+    assert simulation.history[-1]["reaction_bottom_y"] == pytest.approx(load, rel=1e-5)
+
+
+def test_failure_is_structured_not_nan():
+    """A free peg pulled out of the hole has no quasi-static equilibrium: the run must end
+    with a SimulationFailed naming the step and time, after bounded step cuts."""
+    from femcontact.simulation import SimulationFailed
+
+    data = wedging()
+    data["steps"] = [{"name": "pull", "increments": 1, "force": [0.0, 50.0]}]
+    data["solver"] = {"max_cuts": 1, "max_iterations": 6}
+    with pytest.raises(SimulationFailed, match="step 'pull' at t ="):
+        simulate(data)
+
+
+def test_contact_pressure_is_recovered_at_nodes(hertz_levels):
+    assert hertz_levels[-1]["contact_nodes"] >= 2 * math.floor(10.5) - 1
