@@ -7,9 +7,9 @@ assembled from the contact vector in `femcontact.newton`. Components:
   `plane_stress` switches the 2-D law (plane strain otherwise).
 - `contact` (always): frictionless normal contact with the rigid body by Nitsche's
   method (pressure p = [p_sigma - gamma_N g]_+, gamma_N = gamma E / h) or penalty.
-- `friction`: Coulomb friction; the slip increment is measured in the rigid body's
-  frame since the last converged increment, the tangential traction is the
-  projection of t_sigma - gamma_T * slip onto the disc of radius mu * p.
+- `friction`: Coulomb friction by a return map: each contact node sticks to an anchor
+  point of the rigid body (history, in the rigid body's frame); the tangential
+  traction is -gamma_T times the distance to it, projected on the disc of radius mu p.
 - `inertia`: Newmark time integration of the rigid body (and of the deformable body
   with dynamics.deformable_inertia).
 - `gravity`: body force rho * g downwards (-y in 2-D, -z in 3-D), also on the rigid body.
@@ -63,17 +63,22 @@ def add_contact(problem) -> None:
 
 
 def add_friction(problem) -> None:
-    """Coulomb friction with the slip measured in the rigid body's material frame."""
+    """Coulomb friction by a return map on a stick anchor (history).
+
+    Each contact node remembers its anchor: the point of the rigid body, in the rigid
+    body's frame, that it sticks to. The trial traction is -gamma_T times the tangential
+    distance from the anchor (gamma_T = gamma_t E / h_contact); it is projected on the
+    disc of radius mu p. After each converged increment the anchor moves so that the
+    next increment starts from the converged traction (`SchurNewton.update_anchors`), so
+    a load that is removed leaves the stuck state in place."""
     c, rigid = problem.constants, problem.rigid
-    u_old = problem.history_function("u_old")
-    xi_old = rigid.to_local(ufl.SpatialCoordinate(problem.mesh) + u_old, rigid.r_old)
-    slip_local = problem.xi - xi_old
+    anchor = problem.history_function("anchor")
+    problem.initialise_anchor()
+    slip_local = problem.xi - anchor
     slip_local = slip_local - ufl.dot(slip_local, problem.normal_local) * problem.normal_local
-    slip = rigid.to_global_direction(slip_local, rigid.variable)
+    problem.gamma_t = c["gamma_t"] * c["E"] / problem.model.h_contact
+    trial = -problem.gamma_t * rigid.to_global_direction(slip_local, rigid.variable)
     normal = problem.normal
-    gamma_t = c["gamma_t"] * c["E"] / ufl.CellDiameter(problem.mesh)
-    t_sigma = problem.traction_sigma - problem.p_sigma * normal
-    trial = t_sigma - gamma_t * slip
     bound = c["mu"] * problem.pressure
     if problem.dim == 2:
         tangent = ufl.as_vector([-normal[1], normal[0]])
@@ -86,10 +91,6 @@ def add_friction(problem) -> None:
     problem.stick = ufl.conditional(ufl.And(ufl.gt(problem.pressure, 0), ufl.lt(size, bound)), 1.0, 0.0)
     problem.slip = ufl.conditional(ufl.And(ufl.gt(problem.pressure, 0), ufl.ge(size, bound)), 1.0, 0.0)
     problem.traction = problem.traction + tangential
-    if problem.scene["contact"]["theta"] == 0:
-        return
-    t_sigma_v = ufl.derivative(t_sigma, problem.u, problem.v)
-    problem.contact_terms.append(-c["theta"] / gamma_t * ufl.dot(t_sigma - tangential, t_sigma_v))
 
 
 def add_inertia(problem) -> None:

@@ -58,6 +58,11 @@ class SchurNewton:
         self.b_contact = petsc.create_vector(self.residual_contact)
         self.kur = [petsc.create_vector(form) for form in self.contact_dr]
         self.work = [p.u.vector.copy() for _ in range(2 * n_r + 3)]
+        if "anchor" in p.history:
+            v = ufl.TestFunction(p.V)
+            self.area_form = fem.form(sum(v[k] for k in range(p.dim)) * p.ds_contact)
+            self.area = petsc.create_vector(self.area_form)
+            self.b_anchor = petsc.create_vector(self.residual_contact)
 
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix(prefix)
@@ -234,6 +239,29 @@ class SchurNewton:
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
         cap = p.model.h_contact
         return dr * min(1.0, cap / length) if length > 0 else dr
+
+    def update_anchors(self) -> None:
+        """Move each contact node's stick anchor so that -gamma_T (xi - anchor) equals the
+        converged tangential traction: anchor = xi + R^T t / gamma_T. The traction per node
+        is its contact force (integral terms only) over its lumped contact area."""
+        p = self.problem
+        force = self.b_anchor
+        for vector, form in ((force, self.residual_contact), (self.area, self.area_form)):
+            with vector.localForm() as local:
+                local.set(0.0)
+            petsc.assemble_vector(vector, form)
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        from femcontact.rigid_body import rotation_numpy
+
+        with force.localForm() as f, self.area.localForm() as a:
+            traction = -f.array.reshape(-1, p.dim)
+            weight = a.array.reshape(-1, p.dim)[:, :1]
+        traction = np.where(weight > 0, traction / np.where(weight > 0, weight, 1.0), 0.0)
+        R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0
+        gamma_t = float(p.constants["gamma_t"].value * p.constants["E"].value) / p.model.h_contact
+        anchor = p.local_coordinates() + traction @ R / gamma_t
+        p.history["anchor"].x.array[:] = anchor.reshape(-1)
 
     def _linear_solve(self, rhs, out) -> None:
         self.ksp.solve(rhs, out)

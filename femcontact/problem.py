@@ -54,10 +54,18 @@ class Problem:
         # Contact terms use a fixed rule, so the residual and its derivatives integrate
         # alike. In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact:
         # a penetrating corner node is seen at once); basix has no such rule on triangles,
-        # so 3-D uses Gauss points of degree 2p + 2.
+        # so 3-D P1 uses the facet's vertices as a custom rule (the same node-to-surface
+        # contact; the nodes also lie on the exact curved surface, the facets' interior
+        # does not) and 3-D P2 Gauss points of degree 2p + 2.
         degree = scene["mesh"]["degree"]
-        quadrature = ({"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1} if self.dim == 2
-                      else {"quadrature_degree": 2 * degree + 2})
+        if self.dim == 2:
+            quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
+        elif degree == 1:
+            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1,
+                          "quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+                          "quadrature_weights": [1 / 6] * 3}
+        else:
+            quadrature = {"quadrature_degree": 2 * degree + 2}
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=model.facet_tags, metadata=quadrature)
         self.ds_contact = ds(tuple(model.facets[name] for name in model.contact_facets))
         self.constants = make_constants(self.mesh, constants_for(scene, deformable))
@@ -122,6 +130,19 @@ class Problem:
         if name not in self.history:
             self.history[name] = fem.Function(self.V, name=name)
         return self.history[name]
+
+    def local_coordinates(self) -> np.ndarray:
+        """Current position of every dof node in the rigid body's shape frame (numpy, mm)."""
+        from femcontact.rigid_body import rotation_numpy
+
+        x = self.V.tabulate_dof_coordinates()[:, : self.dim] + self.u.x.array.reshape(-1, self.dim)
+        t, angles = self.rigid.split(self.rigid.values)
+        R = rotation_numpy(angles) @ self.rigid.Q0
+        return (x - self.rigid.p0 - np.asarray(t)) @ R
+
+    def initialise_anchor(self) -> None:
+        """Every node starts stuck where it is."""
+        self.history["anchor"].x.array[:] = self.local_coordinates().reshape(-1)
 
     # -- rigid-body inertia (Newmark) ---------------------------------------------------
     def _newmark(self):

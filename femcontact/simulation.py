@@ -127,6 +127,8 @@ class Simulation:
         start = time.perf_counter()
         row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
         self.timings["output"] += time.perf_counter() - start
+        if "anchor" in p.history:
+            self.newton.update_anchors()
         p.commit(load.dt)
         return row
 
