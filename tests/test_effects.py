@@ -1,0 +1,79 @@
+"""Only the effects a scene names are built: inspect the forms, constants and history.
+
+Also checks each law builds what it claims: the stored energy of a uniform stretch
+e = 0.1 against Hooke (0.5 (lambda + 2 mu) e^2) and St Venant-Kirchhoff
+(0.5 (lambda + 2 mu) (e + e^2/2)^2), plane strain, exact for P1."""
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+from femcontact.problem import Problem
+from femcontact.scene import resolve
+from geometry.model import build
+
+
+def problem(effects, **dynamics) -> Problem:
+    scene = resolve({"name": "effects", "dim": 2, "geometry": "block", "effects": effects,
+                     "block": {"width": 4.0, "height": 2.0}, "indenter": {"shape": "flat", "width": 8.0},
+                     "materials": {"block": {"E": 1000.0, "nu": 0.25}}, "dynamics": dynamics,
+                     "mesh": {"contact_size": 0.5, "contact_zone": 1.0, "size_max": 1.0},
+                     "steps": [{"name": "s"}]})
+    return Problem(scene, build(scene, MPI.COMM_WORLD))
+
+
+def form_constants(p: Problem) -> set:
+    names = {id(c): name for name, c in p.constants.items()}
+    forms = sum(p.bulk) + p.contact_integrand * p.ds_contact
+    return {names[id(c)] for c in forms.constants() if id(c) in names}
+
+
+def test_frictionless_quasi_static_builds_no_history_no_mass():
+    p = problem(["plane_strain"])
+    assert p.built == ["elasticity", "contact", "rigid_corners"]  # the flat punch has sharp corners
+    assert p.history == {}
+    assert p.stick is None and not p.rigid_inertia
+    assert form_constants(p) == {"E", "nu", "gamma"}
+
+
+def test_friction_adds_anchor_history_and_mu():
+    p = problem(["friction", "plane_strain"])
+    assert "friction" in p.built and set(p.history) == {"anchor"}
+    assert {"mu", "gamma_t"} <= form_constants(p)
+    assert "density" not in form_constants(p)
+
+
+def test_inertia_builds_mass_terms_only_when_asked():
+    rigid_only = problem(["inertia", "plane_strain"])
+    assert rigid_only.rigid_inertia and rigid_only.history == {} and "density" not in form_constants(rigid_only)
+    full = problem(["inertia", "plane_strain"], deformable_inertia=True)
+    assert set(full.history) == {"u_old", "v_old", "a_old"}
+    assert {"density", "dt", "beta"} <= form_constants(full)
+
+
+def test_gravity_adds_weight():
+    p = problem(["gravity", "plane_strain"])
+    assert "gravity" in p.built and {"density", "g"} <= form_constants(p)
+
+
+@pytest.mark.parametrize("effects, energy", [
+    (["plane_strain"], lambda c, e: 0.5 * c * e * e),
+    (["large_strain", "plane_strain"], lambda c, e: 0.5 * c * (e + e * e / 2) ** 2),
+])
+def test_stored_energy_of_uniform_stretch(effects, energy):
+    p = problem(effects)
+    e, E, nu = 0.1, 1000.0, 0.25
+    lmbda, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    p.u.interpolate(lambda x: np.vstack([e * x[0], 0 * x[1]]))
+    value = p.mesh.comm.allreduce(fem.assemble_scalar(fem.form(p.energy_density * p.dx)), op=MPI.SUM)
+    assert value / (4.0 * 2.0) == pytest.approx(energy(lmbda + 2 * mu, e), rel=1e-12)
+
+
+def test_plane_stress_softens_lambda():
+    strain, stress = problem(["plane_strain"]), problem(["plane_stress"])
+    for p in (strain, stress):
+        p.u.interpolate(lambda x: np.vstack([0.01 * x[0], 0 * x[1]]))
+    energy = [fem.assemble_scalar(fem.form(p.energy_density * p.dx)) for p in (strain, stress)]
+    E, nu = 1000.0, 0.25
+    assert energy[1] / energy[0] == pytest.approx((E / (1 - nu * nu)) / (E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))))
