@@ -12,6 +12,7 @@ import time
 import traceback
 from pathlib import Path
 
+from femcontact.errors import InputError
 from femcontact.scene import case_id, load_scene
 
 
@@ -38,15 +39,17 @@ def write_json_atomic(path: Path, data) -> None:
     os.replace(tmp, path)
 
 
-def simulate(scene: dict, case_dir: Path) -> dict:
+def simulate(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
     """Run a resolved scene; returns {'metrics', 'timings', 'info'} or raises SimulationFailed."""
     if scene["kind"] == "rcc":
+        if checkpoint or restart:
+            raise InputError("--checkpoint/--restart: an rcc case has no steps to share")
         from femcontact import rcc
 
         return rcc.run_case(scene, case_dir)
     from femcontact import simulation
 
-    return simulation.run_scene(scene, case_dir)
+    return simulation.run_scene(scene, case_dir, checkpoint, restart)
 
 
 def command(args) -> int:
@@ -61,7 +64,7 @@ def command(args) -> int:
     MPI.COMM_WORLD.barrier()
     start = time.perf_counter()
     try:
-        result = {"status": "ok", "reason": None, **simulate(scene, case_dir)}
+        result = {"status": "ok", "reason": None, **simulate(scene, case_dir, args.checkpoint, args.restart)}
     except Exception as error:  # recorded, never a half-written result
         reason = f"{type(error).__name__}: {error}"
         result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},

@@ -72,10 +72,43 @@ class Simulation:
         V = self.problem.V
         return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
 
-    def run(self) -> list[dict]:
-        for index, step in enumerate(self.scene["steps"]):
+    def run(self, first_step: int = 0) -> list[dict]:
+        for index, step in enumerate(self.scene["steps"][first_step:], start=first_step):
             self.run_step(index, step)
         return self.history
+
+    # -- checkpoints: a study's shared prefix is computed once --------------------------------
+    def save_checkpoint(self, directory: Path) -> None:
+        """Write this rank's state after the steps run so far (restart needs the same ranks)."""
+        p, comm = self.problem, self.problem.mesh.comm
+        directory = Path(directory)
+        if comm.rank == 0:
+            directory.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        corners = p.corners
+        np.savez(directory / f"rank{comm.rank}.npz", r_old=p.rigid.r_old.value, tangential_old=corners.tangential_old,
+                 corner_old=corners.corner_old, corner_u_old=corners.u_old, **p.state())
+        if comm.rank == 0:
+            from femcontact.run import write_json_atomic
+
+            write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
+                                                              "history": self.history})
+
+    def load_checkpoint(self, directory: Path) -> int:
+        """Restore a checkpoint; returns the number of steps it holds."""
+        import json
+
+        p, comm = self.problem, self.problem.mesh.comm
+        meta = json.loads((Path(directory) / "checkpoint.json").read_text())
+        if meta["ranks"] != comm.size:
+            raise InputError(f"--restart {directory}: written on {meta['ranks']} ranks, run on {comm.size}")
+        data = dict(np.load(Path(directory) / f"rank{comm.rank}.npz"))
+        p.restore(data)
+        p.rigid.r_old.value[:] = data["r_old"]
+        p.corners.tangential_old[:] = data["tangential_old"]
+        p.corners.corner_old, p.corners.u_old = data["corner_old"], data["corner_u_old"]
+        self.history = meta["history"]
+        return meta["steps"]
 
     def run_step(self, index: int, step: dict) -> None:
         """Advance through one step with adaptive increments."""
@@ -186,15 +219,19 @@ def summary_metrics(simulation: Simulation) -> dict:
     return metrics
 
 
-def run_scene(scene: dict, case_dir: Path) -> dict:
-    """Run a resolved contact scene; write history.csv and fields.npz into case_dir."""
+def run_scene(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
+    """Run a resolved contact scene; write history.csv and fields.npz into case_dir.
+    `checkpoint`: also save the final state in case_dir/checkpoint; `restart`: start from
+    such a checkpoint (same first steps, same ranks) and run only the later steps."""
     from femcontact.fields import write_fields
 
     if not scene["steps"]:
         raise InputError("steps: a contact scene needs at least one step")
     simulation = Simulation(scene)
-    simulation.run()
+    simulation.run(simulation.load_checkpoint(restart) if restart else 0)
     case_dir = Path(case_dir)
+    if checkpoint:
+        simulation.save_checkpoint(case_dir / "checkpoint")
     start = time.perf_counter()
     simulation.write_history(case_dir / "history.csv")
     write_fields(simulation, case_dir)

@@ -181,3 +181,17 @@ def test_failure_is_structured_not_nan():
 
 def test_contact_pressure_is_recovered_at_nodes(hertz_levels):
     assert hertz_levels[-1]["contact_nodes"] >= 2 * math.floor(10.5) - 1
+
+
+def test_restart_from_checkpoint_matches_full_run(tmp_path, wedged):
+    """A study's shared prefix: the load step is saved once, the release restarts from it."""
+    prefix_data = wedging()
+    prefix_data["steps"] = prefix_data["steps"][:1]
+    prefix = simulate(prefix_data)
+    prefix.save_checkpoint(tmp_path)
+    restarted = Simulation(resolve(wedging()))
+    restarted.run(restarted.load_checkpoint(tmp_path))
+    full, again = wedged.step_end_rows()["release"], restarted.step_end_rows()["release"]
+    for key in ("reaction_support_A_x", "reaction_support_B_y", "tilt_deg"):
+        assert again[key] == pytest.approx(full[key], rel=1e-12)
+    assert len(restarted.history) == len(wedged.history)
