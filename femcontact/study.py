@@ -316,6 +316,15 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact.cli"]
 
 
+def remove_unfinished_compilations(cache_root: Path) -> None:
+    """Delete JIT sources whose compiled module is missing: a case killed while compiling
+    leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
+    here: the runner holds the study lock and its job slots' caches are its own."""
+    for source in cache_root.glob("slot-*/fenics/*.c"):
+        if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
+            source.unlink(missing_ok=True)
+
+
 class Runner:
     """Runs cases `jobs` at a time, enforcing the time limit and recording each result."""
 
@@ -326,6 +335,7 @@ class Runner:
         cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
         self.cache_root = cache / "femcontact-jit"
         self.running: list[Job] = []
+        remove_unfinished_compilations(self.cache_root)
 
     def command(self, case: Case) -> list[str]:
         launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))

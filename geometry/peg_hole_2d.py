@@ -161,7 +161,7 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
         supports = [n for n in facets if n.startswith("support")]
     else:
         contact = [n for n in facets if n in ("peg_left", "peg_right", "peg_tip", "peg_chamfer")]
-        supports = []
+        supports = ["peg_top"]  # the gripper holds the peg top; the rigid hole carries the loads
     return {"facets": facets, "cells": cells, "contact_facets": contact, "supports": supports}
 
 

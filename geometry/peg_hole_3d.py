@@ -97,7 +97,7 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
         contact = ["hole_wall", "hole_mouth", "hole_chamfer"]
     else:
         volume, faces = _peg(scene)
-        cell, supports = "peg", []
+        cell, supports = "peg", ["peg_top"]  # held by the gripper
         contact = ["peg_side", "peg_tip", "peg_chamfer"]
     points = peg_pose(scene).points
     gmsh_tools.background([gmsh_tools.ball_size(sz, points[name], sz.zone) for name in ("contact_A", "contact_B")])
