@@ -71,6 +71,8 @@ class SchurNewton:
             options[prefix + key] = value
         self.ksp.setFromOptions()
         self.ksp.setOperators(self.K)
+        if options.getString(prefix + "pc_type", "") == "gamg":
+            self.K.setNearNullSpace(self._rigid_body_modes())
 
         dim = p.dim
         n_owned = p.V.dofmap.index_map.size_local
@@ -80,6 +82,28 @@ class SchurNewton:
         self.corner_contacts = 0
         self.bc_dofs = p.support_dof_set
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
+
+    def _rigid_body_modes(self) -> PETSc.NullSpace:
+        """Near-nullspace of elasticity (translations and rotations) for algebraic multigrid."""
+        p = self.problem
+        x = p.V.tabulate_dof_coordinates()[: p.V.dofmap.index_map.size_local, : p.dim]
+        modes = []
+        for k in range(p.dim):
+            mode = np.zeros_like(x)
+            mode[:, k] = 1.0
+            modes.append(mode)
+        for k in [2] if p.dim == 2 else [0, 1, 2]:
+            modes.append(_cross_axis(k, x))
+        vectors = []
+        for mode in modes:
+            vector = p.u.vector.copy()
+            vector.array_w[:] = mode.reshape(-1)
+            vectors.append(vector)
+        for i, vector in enumerate(vectors):  # PETSc wants an orthonormal basis
+            for other in vectors[:i]:
+                vector.axpy(-vector.dot(other), other)
+            vector.normalize()
+        return PETSc.NullSpace().create(vectors=vectors, comm=p.mesh.comm)
 
     # -- rigid-body modes of the current configuration ---------------------------------
     def _arms(self) -> np.ndarray:
