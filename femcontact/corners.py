@@ -18,9 +18,9 @@ sampled by RIM_POINTS points; each is the slave of a node-to-triangle element ag
 the owned contact facets (barycentric projection, outward facet normal), with the
 penalty kappa = gamma * E * (rim length per point) (N/mm) and the same Coulomb return
 map on a tangential force vector in the facet's plane. On a facet of a round hole's
-wall the gap is measured to the exact cylinder the flat facet approximates (the chord
-lies inside it by up to h^2 / 8R, microns, comparable to the clearances), consistently
-with the nodal contact rule, whose nodes lie on the cylinder.
+wall the gap is measured to the exact cylinder the flat facet approximates (a flat facet
+protrudes into the hole by up to h^2 / 8R, microns, comparable to the clearances),
+consistently with the nodal contact rule, whose nodes lie on the cylinder.
 """
 import numpy as np
 from mpi4py import MPI
@@ -264,7 +264,7 @@ class RimPoints(RigidCorners):
         return self.coordinates[i] + u[3 * i: 3 * i + 3]
 
     def _sag(self, row, s, t) -> float:
-        """How far inside the exact wall cylinder the facet's point (s, t) lies (mm; 0 off the wall)."""
+        """How far the facet's point (s, t) protrudes into the round hole (mm; 0 off the wall)."""
         if self.wall_radius is None or not self.curved[row]:
             return 0.0
         a, b, c, _ = self.segments[row]
@@ -285,7 +285,7 @@ class RimPoints(RigidCorners):
         else:
             s, t = st_fixed
         point = xa + s * e1 + t * e2
-        gap = (corner - point) @ normal - (sag_of(s, t) if sag_of else 0.0)
+        gap = (corner - point) @ normal + (sag_of(s, t) if sag_of else 0.0)
         kappa = float(p.constants["gamma"].value * p.constants["E"].value) * self.arc
         active = gap < 0 if state is None else state[0]
         f_n = kappa * max(-gap, 0.0) if state is None else kappa * (-gap) * active
