@@ -40,7 +40,7 @@ class RigidCorners:
     node-to-triangle contact of points on the rims of a rigid cylinder (`RimPoints`)."""
 
     def __new__(cls, problem):
-        if cls is RigidCorners and problem.dim == 3:
+        if cls is RigidCorners and problem.dim == 3 and RIM_CONTACT:
             return super().__new__(RimPoints)
         return super().__new__(cls)
 
@@ -207,6 +207,11 @@ class RigidCorners:
         self.u_old = p.u.x.array.copy()
 
 
+RIM_CONTACT = False
+"""3-D rim points are off: with them the wedging scene's load step cycles (Newton stalls at
+a residual ~5 N between two active sets of rim points, docs/wedging_3d.md); without them
+the rim is seen when the wall nodes next to it touch the peg's side (an error in the
+contact point of under an element size)."""
 RIM_POINTS = 128  # sample points on each rim of a 3-D cylinder (the contact point at phi = 0 included)
 
 

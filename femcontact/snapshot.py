@@ -66,7 +66,7 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
                                  scalar_bar_args={"title": "MPa", "vertical": True, "fmt": "%.4g",
                                                   "position_x": 0.85, "position_y": 0.1, "width": 0.08})
         ranges.append(tuple(actor.mapper.lookup_table.scalar_range))
-        if "rigid_outline" in fields:
+        if "rigid_outline" in fields and len(fields["rigid_outline"]) > 1:  # 3-D cylinders have none
             plotter.add_mesh(pyvista.lines_from_points(fields["rigid_outline"]), color="black", line_width=3)
         _place_camera(plotter, grid, plane, view)
         plotter.add_text("von Mises stress, " + ("contact zone" if view is not None else "deformed shape"),

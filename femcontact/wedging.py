@@ -93,7 +93,7 @@ def wedge_metrics(simulation) -> dict:
         supports = [name for name in simulation.problem.support_dofs if name.endswith(zone)]
         vector = sum((_vector(final, f"reaction_{name}", dim) for name in supports), np.zeros(dim))
         if not supports:  # single block: use the contact resultants of the zone
-            vector = -_vector(final, f"contact_{zone}_F", dim)
+            vector = -np.array([final.get(f"contact_{zone}_F{axis}", np.nan) for axis in "xyz"[:dim]])
         forces[zone] = vector
         out[f"residual_force_{zone}"] = float(np.linalg.norm(vector))
         for k, axis in enumerate("xyz"[:dim]):
