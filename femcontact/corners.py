@@ -1,4 +1,4 @@
-"""Sharp corners of a rigid body against the deformable surface (2-D, P1; 3-D rims, P1).
+"""Sharp corners of a rigid body against the deformable surface (2-D, P1).
 
 The contact integral sees the rigid body only through its signed distance, which is
 right where a corner of the deformable body presses a rigid face, but blind where a
@@ -13,14 +13,9 @@ point. The force enters the contact vector C at the segment's two nodes, so the
 rigid-body rows of the Newton system follow from C as for the integral terms. The
 element's Jacobian is taken by central differences with the contact state frozen.
 
-3-D (`RimPoints`): the sharp circular rims of a rigid cylinder (peg tip and top) are
-sampled by RIM_POINTS points; each is the slave of a node-to-triangle element against
-the owned contact facets (barycentric projection, outward facet normal), with the
-penalty kappa = gamma * E * (rim length per point) (N/mm) and the same Coulomb return
-map on a tangential force vector in the facet's plane. On a facet of a round hole's
-wall the gap is measured to the exact cylinder the flat facet approximates (a flat facet
-protrudes into the hole by up to h^2 / 8R, microns, comparable to the clearances),
-consistently with the nodal contact rule, whose nodes lie on the cylinder.
+In 3-D the rims of a rigid cylinder are not treated this way (yet): an attempt with
+node-to-triangle rim points did not converge (commit e18e21b, docs/wedging_3d.md); the
+rim is seen once the wall nodes next to it touch the peg's side.
 """
 import numpy as np
 from mpi4py import MPI
@@ -36,13 +31,7 @@ def corner_points(rigid: dict) -> np.ndarray:
 
 
 class RigidCorners:
-    """Node-to-segment contact of the rigid body's sharp corners (2-D, P1); in 3-D the
-    node-to-triangle contact of points on the rims of a rigid cylinder (`RimPoints`)."""
-
-    def __new__(cls, problem):
-        if cls is RigidCorners and problem.dim == 3 and RIM_CONTACT:
-            return super().__new__(RimPoints)
-        return super().__new__(cls)
+    """Node-to-segment contact of the rigid body's sharp corners (2-D, P1)."""
 
     def __init__(self, problem):
         self.problem = p = problem
@@ -204,194 +193,6 @@ class RigidCorners:
         p = self.problem
         self.tangential_old[:] = np.where(self.active, self.tangential, 0.0)
         self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 2)
-        self.u_old = p.u.x.array.copy()
-
-
-RIM_CONTACT = False
-"""3-D rim points are off: with them the wedging scene's load step cycles (Newton stalls at
-a residual ~5 N between two active sets of rim points, docs/wedging_3d.md); without them
-the rim is seen when the wall nodes next to it touch the peg's side (an error in the
-contact point of under an element size)."""
-RIM_POINTS = 128  # sample points on each rim of a 3-D cylinder (the contact point at phi = 0 included)
-
-
-def rim_points(rigid: dict, points: int = RIM_POINTS) -> np.ndarray:
-    """Points on the sharp rims (tip and top) of a 3-D cylinder about its reference point."""
-    if rigid["shape"] != "cylinder" or rigid["corner_radius"] > 0:
-        return np.zeros((0, 3))
-    R, h = rigid["radius"], rigid["length"] / 2
-    phi = 2 * np.pi * np.arange(points) / points
-    ring = np.c_[R * np.cos(phi), R * np.sin(phi)]
-    return np.vstack([np.c_[ring, np.full(points, -h)], np.c_[ring, np.full(points, h)]])
-
-
-class RimPoints(RigidCorners):
-    """Node-to-triangle contact of points on the rims of a rigid cylinder (3-D, P1)."""
-
-    def __init__(self, problem):
-        self.problem = p = problem
-        rigid = p.model.rigid
-        self.points = rim_points(rigid) if p.scene["mesh"]["degree"] == 1 else np.zeros((0, 3))
-        self.friction = "friction" in p.effects
-        self.arc = 2 * np.pi * rigid.get("radius", 0.0) / RIM_POINTS  # rim length per point (mm)
-        self.segments, self.curved = self._segments() if len(self.points) else (np.zeros((0, 4), np.int32), None)
-        self.search = 4 * p.model.h_contact
-        self.wall_radius = p.scene["hole"]["width"] / 2 if p.scene["geometry"] == "peg_in_hole" else None
-        n = len(self.points)
-        self.tangential_old = np.zeros((n, 3))
-        self.tangential = np.zeros((n, 3))
-        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 3)
-        self.u_old = p.u.x.array.copy()
-        self.active = np.zeros(n, dtype=bool)
-
-    def _segments(self):
-        """Owned contact facets as rows (3 facet nodes, opposite node) of V's block dofs, and
-        whether each lies on a round hole's wall (the tag `hole_wall`)."""
-        p = self.problem
-        mesh, tdim = p.mesh, p.dim
-        mesh.topology.create_connectivity(tdim - 1, tdim)
-        mesh.topology.create_connectivity(tdim, tdim - 1)
-        f2c, c2f = mesh.topology.connectivity(tdim - 1, tdim), mesh.topology.connectivity(tdim, tdim - 1)
-        n_cells = mesh.topology.index_map(tdim).size_local
-        rows, curved = [], []
-        for name in p.model.contact_facets:
-            for facet in p.model.facet_tags.find(p.model.facets[name]):
-                cell = f2c.links(facet)[0]
-                if cell >= n_cells:
-                    continue
-                local = int(np.where(c2f.links(cell) == facet)[0][0])  # facet i is opposite vertex i
-                dofs = p.V.dofmap.cell_dofs(cell)
-                rows.append([dofs[(local + k) % 4] for k in (1, 2, 3)] + [dofs[local]])
-                curved.append(name == "hole_wall")
-        return np.array(rows, dtype=np.int32).reshape(-1, 4), np.array(curved, dtype=bool)
-
-    def _x(self, i, u):
-        return self.coordinates[i] + u[3 * i: 3 * i + 3]
-
-    def _sag(self, row, s, t) -> float:
-        """How far the facet's point (s, t) protrudes into the round hole (mm; 0 off the wall)."""
-        if self.wall_radius is None or not self.curved[row]:
-            return 0.0
-        a, b, c, _ = self.segments[row]
-        X = self.coordinates[a] + s * (self.coordinates[b] - self.coordinates[a]) + t * (self.coordinates[c] - self.coordinates[a])
-        return self.wall_radius - float(np.hypot(X[0], X[1]))
-
-    def _force(self, k, corner, xa, xb, xc, xo, sag_of=None, st_fixed=None, state=None):
-        """Force on the rim point (N), its facet coordinates (s, t), gap, state, tangential force."""
-        p = self.problem
-        e1, e2 = xb - xa, xc - xa
-        normal = np.cross(e1, e2)
-        normal /= np.linalg.norm(normal)
-        if normal @ (xa - xo) < 0:
-            normal = -normal  # outward from the deformable body
-        if st_fixed is None:
-            G = np.array([[e1 @ e1, e1 @ e2], [e1 @ e2, e2 @ e2]])
-            s, t = np.linalg.solve(G, [e1 @ (corner - xa), e2 @ (corner - xa)])
-        else:
-            s, t = st_fixed
-        point = xa + s * e1 + t * e2
-        gap = (corner - point) @ normal + (sag_of(s, t) if sag_of else 0.0)
-        kappa = float(p.constants["gamma"].value * p.constants["E"].value) * self.arc
-        active = gap < 0 if state is None else state[0]
-        f_n = kappa * max(-gap, 0.0) if state is None else kappa * (-gap) * active
-        force = f_n * normal
-        zero = np.zeros(3)
-        if not (self.friction and active):
-            return force, (s, t), gap, (active, True, zero), zero
-        xa0, xb0, xc0 = self._old_segment
-        slip = (corner - self.corner_old[k]) - (point - (xa0 + s * (xb0 - xa0) + t * (xc0 - xa0)))
-        slip = slip - (slip @ normal) * normal
-        old = self.tangential_old[k] - (self.tangential_old[k] @ normal) * normal
-        kappa_t = float(p.constants["gamma_t"].value * p.constants["E"].value) * self.arc
-        trial = old - kappa_t * slip
-        bound = float(p.constants["mu"].value) * f_n
-        size = np.linalg.norm(trial)
-        stick = size <= bound if state is None else state[1]
-        direction = trial / size if size > 0 else zero
-        f_t = trial if stick else bound * (direction if state is None else state[2])
-        return force + f_t, (s, t), gap, (active, stick, direction), f_t
-
-    def _find(self, corner, u):
-        """Best facet on this rank: (distance, row) with the point projecting inside it."""
-        if not len(self.segments):
-            return np.inf, -1
-        x = self.coordinates + u.reshape(-1, 3)
-        xa, xb, xc = (x[self.segments[:, j]] for j in range(3))
-        e1, e2, w = xb - xa, xc - xa, corner - xa
-        d11, d12, d22 = (np.einsum("ij,ij->i", a, b) for a, b in ((e1, e1), (e1, e2), (e2, e2)))
-        w1, w2 = np.einsum("ij,ij->i", w, e1), np.einsum("ij,ij->i", w, e2)
-        det = d11 * d22 - d12 * d12
-        s, t = (d22 * w1 - d12 * w2) / det, (d11 * w2 - d12 * w1) / det
-        normal = np.cross(e1, e2)
-        distance = np.abs(np.einsum("ij,ij->i", w, normal)) / np.linalg.norm(normal, axis=1)
-        tol = 1e-9
-        distance[(s < -tol) | (t < -tol) | (s + t > 1 + tol) | (distance > self.search)] = np.inf
-        row = int(np.argmin(distance))
-        return (float(distance[row]), row) if np.isfinite(distance[row]) else (np.inf, -1)
-
-    def contributions(self, with_jacobian: bool):
-        """Per active rim point on this rank: (dofs (9,), C entries (9,), dC/du (9x9), dC/dr (9 x 6))."""
-        p = self.problem
-        self.coordinates = p.V.tabulate_dof_coordinates()[:, :3]
-        u = p.u.x.array
-        comm = p.mesh.comm
-        places = np.array([p.rigid.place(point + _tip(p)) for point in self.points]).reshape(-1, 3)
-        found = [self._find(corner, u) for corner in places]
-        owners = np.argmin(np.array(comm.allgather([d for d, _ in found])).reshape(comm.size, -1), axis=0)
-        out = []
-        self.active[:] = False
-        for k, point in enumerate(self.points):
-            row = found[k][1]
-            if comm.rank != owners[k] or row < 0:
-                continue
-            nodes = self.segments[row]
-            self._old_segment = tuple(self._x(i, self.u_old) for i in nodes[:3])
-            sag_of = lambda s, t, row=row: self._sag(row, s, t)  # noqa: E731
-            force, st, gap, state, f_t = self._force(k, places[k], *(self._x(i, u) for i in nodes), sag_of=sag_of)
-            if not state[0]:
-                continue
-            self.active[k] = True
-            self.tangential[k] = f_t
-            dofs = np.array([3 * i + j for i in nodes[:3] for j in range(3)], dtype=np.int32)
-            weights = np.array([1 - st[0] - st[1], st[0], st[1]])
-            entries = np.kron(weights, force)
-            dC_du = dC_dr = None
-            if with_jacobian:
-                dC_du, dC_dr = self._derivatives(k, point, nodes, state, sag_of)
-            out.append((dofs, entries, dC_du, dC_dr))
-        active = comm.allreduce(int(self.active.sum()), op=MPI.SUM)
-        return out, active
-
-    def _derivatives(self, k, point, nodes, state, sag_of, h=1e-9):
-        """Central differences of the C entries in the 9 facet dofs and the rigid dofs."""
-        p = self.problem
-        u = p.u.x.array
-        x = [self._x(i, u) for i in nodes]
-        r0 = p.rigid.values.copy()
-
-        def entries(dx, r):
-            corner = p.rigid.place(point + _tip(p), r)
-            moved = [x[j] + dx[3 * j: 3 * j + 3] for j in range(3)]
-            force, st, *_ = self._force(k, corner, *moved, x[3], sag_of=sag_of, state=state)
-            return np.kron([1 - st[0] - st[1], st[0], st[1]], force)
-
-        dC_du = np.zeros((9, 9))
-        for j in range(9):
-            e = np.zeros(9)
-            e[j] = h
-            dC_du[:, j] = (entries(e, r0) - entries(-e, r0)) / (2 * h)
-        dC_dr = np.zeros((9, len(r0)))
-        zero = np.zeros(9)
-        for j in range(len(r0)):
-            e = np.zeros(len(r0))
-            e[j] = h
-            dC_dr[:, j] = (entries(zero, r0 + e) - entries(zero, r0 - e)) / (2 * h)
-        return dC_du, dC_dr
-
-    def commit(self) -> None:
-        p = self.problem
-        self.tangential_old[:] = np.where(self.active[:, None], self.tangential, 0.0)
-        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 3)
         self.u_old = p.u.x.array.copy()
 
 
