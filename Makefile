@@ -57,7 +57,7 @@ test-serial: setup
 	$(PY) -m pytest -q tests --ignore=tests/mpi
 
 test-mpi: setup
-	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider tests/mpi
+	timeout 1200 mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider tests/mpi
 
 study: $(DEFAULT_STUDY)
 

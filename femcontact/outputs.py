@@ -90,7 +90,7 @@ class Recorder:
             for k, axis in enumerate("xyz"[:dim]):
                 row[f"reaction_{name}_{axis}"] = force[k]
             row[f"reaction_{name}"] = float(np.linalg.norm(force))
-            moment = np.cross(x[owned], full[owned]).reshape(len(owned), -1).sum(axis=0)  # about the origin
+            moment = np.atleast_1d(np.cross(x[owned], full[owned]).sum(axis=0))  # about the origin
             for k, axis in enumerate(["z"] if dim == 2 else "xyz"):
                 row[f"reaction_{name}_M{axis}"] = self._sum(float(moment[k]))
 
