@@ -38,6 +38,14 @@ class Sizes:
         return (self.max - self.contact) / GRADING
 
 
+def meshed_scale(scene: dict) -> float:
+    """Length scale (mm) of the meshed peg-in-hole body: min(block_width, depth) for the
+    hole block(s), min(width, length) for a meshed peg."""
+    if scene["rigid"] == "peg":
+        return min(scene["hole"]["block_width"], scene["hole"]["depth"])
+    return min(scene["peg"]["width"], scene["peg"]["length"])
+
+
 def sizes(mesh: dict, contact: float, size_max: float, zone: float) -> Sizes:
     """Sizes from the scene's `mesh` section; the defaults apply where it says 0."""
     h_c = mesh["contact_size"] or contact

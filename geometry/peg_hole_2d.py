@@ -23,10 +23,7 @@ ALL = [(-math.inf, math.inf)]
 def sizes(scene: dict) -> gmsh_tools.Sizes:
     """Default sizes from a length scale s: contact size s/250, max size s/5, zone s/10, with
     s = min(block_width, depth) for meshed blocks, min(width, length) for a meshed peg."""
-    if scene["rigid"] == "peg":
-        scale = min(scene["hole"]["block_width"], scene["hole"]["depth"])
-    else:
-        scale = min(scene["peg"]["width"], scene["peg"]["length"])
+    scale = gmsh_tools.meshed_scale(scene)
     return gmsh_tools.sizes(scene["mesh"], scale / 250, scale / 5, scale / 10)
 
 

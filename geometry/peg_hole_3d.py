@@ -22,10 +22,7 @@ ABOVE = 1.0  # how far (mm) cutting tools reach above the mouth, for clean boole
 def sizes(scene: dict) -> gmsh_tools.Sizes:
     """Default sizes from a length scale s: contact size s/40, max size s/4, zone s/10, with
     s = min(block_width, depth) for the block, min(width, length) for a meshed peg."""
-    if scene["rigid"] == "peg":
-        scale = min(scene["hole"]["block_width"], scene["hole"]["depth"])
-    else:
-        scale = min(scene["peg"]["width"], scene["peg"]["length"])
+    scale = gmsh_tools.meshed_scale(scene)
     return gmsh_tools.sizes(scene["mesh"], scale / 40, scale / 4, scale / 10)
 
 
