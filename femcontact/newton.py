@@ -78,7 +78,6 @@ class SchurNewton:
         n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[:n_owned, :dim]
         self.n_owned = n_owned
-        self.iterations = 0
         self.corner_contacts = 0
         self.bc_dofs = p.support_dof_set
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
@@ -177,7 +176,6 @@ class SchurNewton:
             if not np.isfinite(norm):
                 raise NewtonFailure("residual is not finite", history)
             if norm <= options["atol"] + options["rtol"] * scale:
-                self.iterations += iteration
                 return iteration
             if iteration == options["max_iterations"]:
                 break

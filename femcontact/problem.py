@@ -149,15 +149,20 @@ class Problem:
         d = self.scene["dynamics"]
         return d["newmark_beta"], d["newmark_gamma"]
 
+    def _acceleration(self, x, x_old, v_old, a_old, dt: float):
+        """Newmark acceleration at the end of an increment from the displacement x."""
+        beta, _ = self._newmark()
+        return (x - x_old - dt * v_old) / (beta * dt * dt) - (1 / (2 * beta) - 1) * a_old
+
+    def _rigid_acceleration(self, dt: float) -> np.ndarray:
+        return self._acceleration(self.rigid.values, self.rigid.r_old.value, self.rigid_velocity,
+                                  self.rigid_acceleration, dt)
+
     def rigid_inertia_force(self, load) -> np.ndarray:
         """M a(r) (N, N*mm) for the current pose; zero without the inertia effect."""
         if not self.rigid_inertia:
             return np.zeros(len(self.rigid.names))
-        beta, _ = self._newmark()
-        dt = load.dt
-        a = ((self.rigid.values - self.rigid.r_old.value - dt * self.rigid_velocity) / (beta * dt * dt)
-             - (1 / (2 * beta) - 1) * self.rigid_acceleration)
-        return self.rigid_mass_matrix @ a
+        return self.rigid_mass_matrix @ self._rigid_acceleration(load.dt)
 
     def rigid_inertia_stiffness(self, load) -> np.ndarray:
         if not self.rigid_inertia:
@@ -171,16 +176,14 @@ class Problem:
 
     def commit(self, dt: float) -> None:
         """Accept the converged increment: update velocities, accelerations and history."""
-        beta, gamma = self._newmark()
+        _, gamma = self._newmark()
         if self.rigid_inertia:
-            a = ((self.rigid.values - self.rigid.r_old.value - dt * self.rigid_velocity) / (beta * dt * dt)
-                 - (1 / (2 * beta) - 1) * self.rigid_acceleration)
+            a = self._rigid_acceleration(dt)
             self.rigid_velocity += dt * ((1 - gamma) * self.rigid_acceleration + gamma * a)
             self.rigid_acceleration = a
         if "a_old" in self.history:
-            u, u_old = self.u.x.array, self.history["u_old"].x.array
             v_old, a_old = self.history["v_old"].x.array, self.history["a_old"].x.array
-            a = (u - u_old - dt * v_old) / (beta * dt * dt) - (1 / (2 * beta) - 1) * a_old
+            a = self._acceleration(self.u.x.array, self.history["u_old"].x.array, v_old, a_old, dt)
             v_old[:] += dt * ((1 - gamma) * a_old + gamma * a)
             a_old[:] = a
         if "u_old" in self.history:

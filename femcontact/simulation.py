@@ -242,5 +242,6 @@ def run_scene(scene: dict, case_dir: Path, checkpoint: bool = False, restart=Non
 
         metrics.update(wedge_metrics(simulation))
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
-            "effects": list(scene["effects"]), "built": simulation.problem.built}
+            "effects": list(scene["effects"]), "built": simulation.problem.built,
+            "stabilized_increments": simulation.stabilized_increments}
     return {"metrics": metrics, "timings": simulation.timings, "info": info}
