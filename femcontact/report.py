@@ -36,6 +36,10 @@ def command(args) -> int:
     plots = [write_plot(spec, rows, study.results) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
     summary = write_summary(study, database.csv_columns(), rows, plots, snapshots)
+    if study.cases and study.cases[0].scene.get("kind") == "dislodging":
+        from femcontact import dislodging
+
+        plots += dislodging.report(study)
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
     print(f"  table:     {summary}\n  data:      {csv} and {study.database}")
     for path in plots:

@@ -47,6 +47,10 @@ def simulate(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
         from femcontact import rcc
 
         return rcc.run_case(scene, case_dir)
+    if scene["kind"] == "dislodging":
+        from femcontact import dislodging
+
+        return dislodging.run_case(scene, case_dir, checkpoint, restart)
     from femcontact import simulation
 
     return simulation.run_scene(scene, case_dir, checkpoint, restart)

@@ -198,8 +198,12 @@ def resolve(data: dict, overrides=()) -> dict:
         scene = validate(data, rcc.SCHEMA)
         rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running
         return scene
+    if kind == "dislodging":
+        from femcontact import dislodging
+
+        return dislodging.resolve(data)
     if kind != "contact":
-        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc'")
+        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc', 'dislodging'")
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
                     {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
     scene = validate(data, contact_schema(head["dim"], head["geometry"]))

@@ -204,6 +204,7 @@ def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
         if len(case.scene["steps"]) <= shared:
             continue
         scene = {**case.scene, "steps": case.scene["steps"][:shared]}
+        scene.pop("dislodging", None)  # read only after the shared steps
         identity = case_id(scene)
         if identity not in prefixes:
             prefixes[identity] = Case({}, scene, identity, results / "prefix" / identity)
