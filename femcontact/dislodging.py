@@ -5,11 +5,14 @@ wedge the peg (quasi-static) and whose steps 3-4 pull and observe; its `[dislodg
 table says what one case of the study does from the wedged state, in one process
 (the wedged state is computed once, or restored from the study's shared prefix):
 
+- always: the quasi-static pull-out force (the largest pull with a quasi-static
+  equilibrium, no inertia, by bisection; computed with the wedged state and kept in its
+  checkpoint, so a study computes it once per case) and the 1-DOF estimates
+  (`one_dof_thresholds`);
 - method "continuous" / "pulse": one dynamic pull (femcontact.dynamics, implicit Euler)
-  per force in `forces`, and a bisection for the threshold force (to `tolerance`);
-- method "quasi_static": the quasi-static pull-out force (the largest pull with a
-  quasi-static equilibrium, no inertia, by bisection) and the 1-DOF estimate
-  (`one_dof_thresholds`).
+  per force in `forces` and per thesis magnitude in `thesis_forces` (scaled by our
+  pull-out force over the thesis' continuous threshold `thesis_reference`), and a
+  bisection for the threshold force (to `tolerance`).
 
 A pull ends at the event "dislodged": both contact zones open, or the peg risen by
 `rise`; the event time is located inside the increment. Impulses: `impulse_Ns` is the
@@ -20,7 +23,9 @@ exact integral of the applied force from the start of the pull to the event;
 Each case writes pulls.csv (one row per pull) in its directory; `report` gathers them
 into results/NAME/results.csv and thresholds.csv and draws the plots.
 """
+import copy
 import csv
+import json
 import math
 import time
 from pathlib import Path
@@ -31,17 +36,23 @@ from femcontact.errors import InputError
 from femcontact.schema import Field, validate
 
 PULL_STEP, OBSERVE_STEP = 2, 3
+PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
 
 DISLODGING = {
     "case": Field("int", 1, "thesis case number (reference §2: 1 = l_d 7, 1000 N*mm; 2 = l_d 8, 1500 N*mm)", min=1),
-    "method": Field("str", "continuous", "'continuous' (constant pull), 'pulse' (triangle train, one per "
-                    "period) or 'quasi_static' (prescribed slow lift, no inertia)",
-                    choices=("continuous", "pulse", "quasi_static")),
+    "method": Field("str", "continuous", "'continuous' (constant pull) or 'pulse' (triangle train, one per period)",
+                    choices=("continuous", "pulse")),
     "pulse_hz": Field("float", 50.0, "pulse frequency (Hz), method 'pulse'", positive=True),
     "forces": Field("floats", [], "peak pull forces (N) to run and record"),
+    "thesis_forces": Field("floats", [], "thesis magnitudes (N) to run at the same fraction of each model's "
+                           "threshold: F = f * quasi-static pull-out / thesis_reference"),
+    "thesis_reference": Field("float", 20.2, "the thesis' continuous threshold for this case (N)", positive=True),
+    "thickness": Field("float", 1.0, "model thickness (mm). The scene is per mm of thickness; with absolute loads a "
+                       "thickness t is the 1-mm model with the peg's mass times t (the quasi-static wedge is "
+                       "homogeneous of degree 1 in the loads), which is how it is applied", positive=True),
     "search": Field("bool", True, "bisect for the threshold force"),
-    "bracket": Field("floats", [], "initial bracket [low, high] (N) of the threshold; [] = 0.9 and 1.1 "
-                     "times the 1-DOF estimate (widened until it brackets)"),
+    "bracket": Field("floats", [], "initial bracket [low, high] (N) of the threshold; [] = 1 and 1.05 "
+                     "times the quasi-static pull-out force (widened until it brackets)"),
     "tolerance": Field("float", 0.01, "bisection stops at this bracket width (N)", positive=True),
     "rise": Field("float", 0.5, "event 'dislodged': the peg's reference point risen this much (mm), "
                   "or both contact zones open", positive=True),
@@ -139,7 +150,7 @@ class Puller:
         from femcontact.dynamics import DynamicSimulation
 
         self.scene, self.settings = scene, scene["dislodging"]
-        self.simulation = sim = DynamicSimulation(scene, dynamic_from=PULL_STEP)
+        self.simulation = sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
         start = time.perf_counter()
         first = sim.load_checkpoint(restart) if restart else 0
         for index in range(first, min(PULL_STEP, len(scene["steps"]))):
@@ -147,11 +158,26 @@ class Puller:
         self.wedge_time = time.perf_counter() - start
         if checkpoint:
             sim.save_checkpoint(checkpoint)
+        steps = sim.scene["steps"]
+        while len(steps) <= OBSERVE_STEP:  # the wedging prefix alone: pull and observe steps to set later
+            steps.append({**copy.deepcopy(steps[PULL_STEP - 1]), "name": ("pull", "observe")[len(steps) - PULL_STEP]})
         self.wedged_row = sim.history[-1]
         self.wedged = sim.snapshot()
         self.tilt = sim.problem.rigid.tilt()
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
+        stored = Path(restart or "", PULLOUT_FILE)
+        start = time.perf_counter()
+        self.pullout = json.loads(stored.read_text()) if restart and stored.exists() else self.quasi_static_pullout()
+        self.pullout_time = time.perf_counter() - start
+        if checkpoint and sim.problem.mesh.comm.rank == 0:
+            from femcontact.run import write_json_atomic
+
+            write_json_atomic(Path(checkpoint, PULLOUT_FILE), self.pullout)
+        factor = self.settings["thickness"]
+        p = sim.problem
+        p.rigid.mass *= factor
+        p.rigid_mass_matrix = p.rigid_mass_matrix * factor
 
     def _set_pull(self, force: float, method: str, frequency: float) -> None:
         from femcontact.loading import Schedule
@@ -198,8 +224,9 @@ class Puller:
     def threshold(self, method: str, frequency: float, rows: list) -> dict:
         """Bisection for the smallest peak force that dislodges (every pull appended to rows)."""
         s = self.settings
-        low, high = s["bracket"] or (0.9 * self.one_dof["first_slip"], 1.1 * self.one_dof["first_slip"])
-        cache = {}
+        pullout = self.pullout["quasi_static_pullout_N"]
+        low, high = s["bracket"] or (pullout, 1.05 * pullout)
+        cache = {round(row["force_N"], 6): row for row in rows}  # pulls already run are reused
 
         def dislodges(force):
             force = round(force, 6)
@@ -267,8 +294,8 @@ class Puller:
 
 def pull_columns() -> list[str]:
     return ["case", "method", "pulse_hz", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
-            "impulse_frames_Ns", "event", "rise_at_end_mm", "increments", "newton_iterations", "settled",
-            "search", "wall_s"]
+            "impulse_frames_Ns", "event", "force_over_pullout", "thesis_force_N", "thickness_mm", "rise_at_end_mm",
+            "increments", "newton_iterations", "settled", "search", "wall_s"]
 
 
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
@@ -283,20 +310,22 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
     metrics = {"residual_force_A": float(np.hypot(puller.wedged_row["contact_A_Fx"], puller.wedged_row["contact_A_Fy"])),
                **{f"wedged_{k}": v for k, v in puller.contacts.items()}, "tilt_deg": math.degrees(puller.tilt),
                "one_dof_first_slip_N": puller.one_dof["first_slip"], "one_dof_full_slide_N": puller.one_dof["full_slide"],
-               "peg_mass_t": float(sim.problem.rigid.mass), "wedge_time_s": puller.wedge_time}
+               "peg_mass_t": float(sim.problem.rigid.mass), "wedge_time_s": puller.wedge_time,
+               **puller.pullout, "pullout_time_s": puller.pullout_time}
     info = {"dofs": sim.dofs, "effects": list(scene["effects"]), "built": sim.problem.built,
             "newton_iterations": int(sum(row["newton_iterations"] for row in sim.history))}
     if len(scene["steps"]) <= PULL_STEP:
         return {"metrics": metrics, "timings": {"wedge": puller.wedge_time}, "info": info}
     rows, method = [], s["method"]
     frequency = s["pulse_hz"] if method == "pulse" else 0.0
-    if method == "quasi_static":
-        metrics.update(puller.quasi_static_pullout())
-    else:
-        for force in s["forces"]:
-            rows.append({**puller.pull(force, method, frequency), "search": False})
-        if s["search"]:
-            metrics.update(puller.threshold(method, frequency, rows))
+    scale = puller.pullout["quasi_static_pullout_N"] / s["thesis_reference"]
+    for force, thesis in [(f, "") for f in s["forces"]] + [(round(f * scale, 6), f) for f in s["thesis_forces"]]:
+        rows.append({**puller.pull(force, method, frequency), "search": False, "thesis_force_N": thesis})
+    if s["search"]:
+        metrics.update(puller.threshold(method, frequency, rows))
+    for row in rows:
+        row.update(force_over_pullout=row["force_N"] / puller.pullout["quasi_static_pullout_N"],
+                   thickness_mm=s["thickness"])
     if MPI.COMM_WORLD.rank == 0:
         with open(case_dir / "pulls.csv", "w", newline="") as stream:
             writer = csv.DictWriter(stream, fieldnames=pull_columns(), extrasaction="ignore")
@@ -318,9 +347,9 @@ THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowes
     (2, "continuous", 0.0): (None, 22.5), (2, "pulse", 10.0): (22.66, 22.67), (2, "pulse", 20.0): (22.6, 22.61),
     (2, "pulse", 30.0): (22.57, 22.58), (2, "pulse", 40.0): (22.55, 22.56), (2, "pulse", 50.0): (22.5, 22.55),
 }
-THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
-                     "impulse_at_threshold_Ns", "one_dof_first_slip_N", "threshold_over_pullout",
-                     "thesis_threshold_N", "thesis_over_thesis_continuous"]
+THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "thickness_mm", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
+                     "impulse_at_threshold_Ns", "threshold_over_pullout", "one_dof_first_slip_N",
+                     "one_dof_full_slide_N", "thesis_threshold_N", "thesis_over_thesis_continuous"]
 
 
 def _read_csv(path: Path) -> list[dict]:
@@ -339,27 +368,24 @@ def gather(study) -> tuple[list[dict], list[dict]]:
     """The study's pull rows and threshold rows (from the ok case directories)."""
     from femcontact.study import read_result
 
-    pulls, thresholds, pullout, one_dof = [], [], {}, {}
+    pulls, thresholds = [], []
     for case in study.cases:
         result = read_result(case.dir)
         if not result or result["status"] != "ok":
             continue
         s, metrics = case.scene["dislodging"], result["metrics"]
-        one_dof[s["case"]] = metrics.get("one_dof_first_slip_N")
-        if s["method"] == "quasi_static":
-            pullout[s["case"]] = metrics["quasi_static_pullout_N"]
-            continue
         if (case.dir / "pulls.csv").exists():
             pulls += _read_csv(case.dir / "pulls.csv")
         if "threshold_force_N" in metrics:
             hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
+            pullout = metrics["quasi_static_pullout_N"]
             thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "",
+                               "thickness_mm": s["thickness"], "quasi_static_pullout_N": pullout,
+                               "one_dof_first_slip_N": metrics["one_dof_first_slip_N"],
+                               "one_dof_full_slide_N": metrics["one_dof_full_slide_N"],
+                               "threshold_over_pullout": metrics["threshold_force_N"] / pullout,
                                **{k: metrics[k] for k in ("threshold_force_N", "bracket_N", "impulse_at_threshold_Ns")}})
     for row in thresholds:
-        row["quasi_static_pullout_N"] = pullout.get(row["case"], "")
-        row["one_dof_first_slip_N"] = one_dof.get(row["case"], "")
-        row["threshold_over_pullout"] = (row["threshold_force_N"] / pullout[row["case"]]
-                                         if row["case"] in pullout else "")
         hz = _number(row["pulse_hz"]) or 0.0
         thesis = THESIS_THRESHOLDS.get((row["case"], row["method"], hz), (None, None))[1]
         reference = THESIS_THRESHOLDS.get((row["case"], "continuous", 0.0), (None, None))[1]
@@ -384,37 +410,42 @@ def report(study) -> list[Path]:
             writer = csv.DictWriter(stream, fieldnames=columns, extrasaction="ignore")
             writer.writeheader()
             writer.writerows(rows)
+    # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
     thesis_path = Path(__file__).resolve().parent.parent / "tests" / "data" / "dislodging_thesis.csv"
     thesis = _read_csv(thesis_path) if thesis_path.exists() else []
     paths = []
     for case in sorted({int(r["case"]) for r in pulls}):
-        for quantity, label, thesis_value in (
-                ("impulse_Ns", "impulse to dislodge (N s)", None),
-                ("dislodge_time_s", "time to dislodge (s)", lambda r: int(r["dislodge_frame"]) * 0.005)):
+        reference = THESIS_THRESHOLDS[(case, "continuous", 0.0)][1]
+        for quantity, label in (("impulse_Ns", "impulse to dislodge (N s)"), ("dislodge_time_s", "time to dislodge (s)")):
             fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
-            for series in sorted({(r["method"], _number(r["pulse_hz"]) or 0.0) for r in pulls if int(r["case"]) == case}):
-                rows = [r for r in pulls if int(r["case"]) == case and (r["method"], _number(r["pulse_hz"]) or 0.0) == series
-                        and r["dislodged"] == "True"]
-                name = "continuous" if series[0] == "continuous" else f"{series[1]:g} Hz"
-                x = [float(r["force_N"]) for r in rows]
-                for ax, column in zip(axes, (quantity, "impulse_frames_Ns" if quantity == "impulse_Ns" else quantity)):
-                    ax.plot(x, [float(r[column]) for r in rows], "o", ms=3, label=f"model {name}")
-                if thesis:
+            mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
+            for series in sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) for r in mine}):
+                rows = [r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) == series]
+                rows.sort(key=lambda r: float(r["force_N"]))
+                name = ("continuous" if series[0] == "continuous" else f"{series[1]:g} Hz") + \
+                    (f", {series[2]:g} mm" if series[2] != 1.0 else "")
+                x = [float(r["force_over_pullout"]) for r in rows]
+                frames = "impulse_frames_Ns" if quantity == "impulse_Ns" else None
+                axes[0].plot(x, [float(r[quantity]) for r in rows], "o", ms=3, label=f"model {name}")
+                axes[1].plot(x, [float(r[frames]) if frames else math.ceil(float(r[quantity]) / 0.005 - 1e-9) * 0.005
+                                 for r in rows], "o", ms=3, label=f"model {name}")
+                if thesis and series[2] == 1.0:
                     method = "continuous" if series[0] == "continuous" else "pulsed"
                     hz = "" if series[0] == "continuous" else f"{series[1]:g}"
                     trows = [r for r in thesis if int(r["case"]) == case and r["method"] == method
                              and r["pulse_hz"] == hz and r["dislodge_frame"]]
-                    value = thesis_value or (lambda r: _number(r["impulse_Ns"]))
-                    points = [(float(r["force_N"]), value(r)) for r in trows if value(r) is not None]
+                    value = (lambda r: _number(r["impulse_Ns"])) if frames else (lambda r: int(r["dislodge_frame"]) * 0.005)
+                    points = [(float(r["force_N"]) / reference, value(r)) for r in trows if value(r) is not None]
                     if points:
                         axes[1].plot(*zip(*points), "x", ms=4, label=f"thesis {name}")
-            axes[0].set_title(f"case {case}: exact (event located in the increment)")
-            axes[1].set_title(f"case {case}: frame-quantised (0.005 s frames), with the thesis")
+            axes[0].set_title(f"case {case}: exact (event located inside the increment)")
+            axes[1].set_title(f"case {case}: quantised to 0.005 s frames; thesis x = F / {reference:g} N")
             for ax in axes:
-                ax.set_xlabel("peak pull force (N)")
+                ax.set_xlabel("peak pull force / quasi-static pull-out force")
                 ax.grid(True, alpha=0.3)
+                ax.set_yscale("log")
             axes[0].set_ylabel(label)
-            axes[1].legend(fontsize=7, ncol=2)
+            axes[1].legend(fontsize=6, ncol=2)
             fig.tight_layout()
             path = out / f"case{case}_{quantity.split('_')[0]}_vs_force.png"
             fig.savefig(path, dpi=110)
@@ -423,10 +454,11 @@ def report(study) -> list[Path]:
     if thresholds:
         fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
         for case in sorted({r["case"] for r in thresholds}):
-            rows = [r for r in thresholds if r["case"] == case and r["method"] == "pulse"]
+            rows = [r for r in thresholds if r["case"] == case and r["method"] == "pulse" and r["thickness_mm"] == 1.0]
             rows.sort(key=lambda r: float(r["pulse_hz"]))
             hz = [float(r["pulse_hz"]) for r in rows]
-            continuous = [r for r in thresholds if r["case"] == case and r["method"] == "continuous"]
+            continuous = [r for r in thresholds if r["case"] == case and r["method"] == "continuous"
+                          and r["thickness_mm"] == 1.0]
             axes[0].plot(hz, [r["threshold_force_N"] for r in rows], "o-", label=f"model case {case}")
             axes[0].plot(hz, [r["thesis_threshold_N"] or np.nan for r in rows], "x--", label=f"thesis case {case}")
             if continuous:

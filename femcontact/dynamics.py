@@ -240,9 +240,9 @@ class DynamicSimulation(Simulation):
 
         Increments end on the pulse kinks (start, peak, end of each pulse), so the peak load
         is applied exactly. dt starts at dt_max; it is divided by 4 on a solver failure (down
-        to dt_min; Newton gets at most `DYNAMIC_ITERATIONS` iterations), cut when an increment raises the body by more than `max_rise_per_increment`
-        (mm; to 0.8 of it for a lift growing like dt^2), and doubled back after an increment
-        of at most 8 Newton iterations.
+        to dt_min; Newton gets at most `DYNAMIC_ITERATIONS` iterations), cut when an increment
+        raises the body by more than `max_rise_per_increment` (mm; to 0.8 of it for a lift
+        growing like dt^2), and doubled back after an increment of at most 8 iterations.
         A step whose load is periodic (a pulse train; a constant load with any period,
         `settle_period` used) is left early when the pose at the end of a period differs from
         the one a period before by less than `settle_tolerance` (mm; rotations times the body
@@ -252,9 +252,19 @@ class DynamicSimulation(Simulation):
         p = self.problem
         if not self.inertia:
             raise InputError("effects: the dynamic pull needs 'inertia'")
-        p.rigid_inertia = True
         solver = self.scene["solver"]
-        solver["max_iterations"] = min(solver["max_iterations"], DYNAMIC_ITERATIONS)
+        allowed = solver["max_iterations"]
+        solver["max_iterations"] = min(allowed, DYNAMIC_ITERATIONS)
+        p.rigid_inertia = True
+        try:
+            return self._integrate(steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
+                                   settle_tolerance, monitor)
+        finally:
+            solver["max_iterations"] = allowed
+
+    def _integrate(self, steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
+                   settle_tolerance, monitor) -> Outcome:
+        p = self.problem
         size = p.shape["scale"]
         weights = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size)
         y0 = float(p.rigid.values[1])

@@ -178,3 +178,43 @@ def test_rigid_punch_hitting_elastic_block_gains_no_energy(method):
     assert p.rigid_velocity[1] > 0  # it bounced off
     assert p.rigid_velocity[1] <= v0
     assert max(row[3] for row in outcome.trace) > 0  # there was contact
+
+
+# -- the wedged thesis peg (coarse mesh) ------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def wedged_peg():
+    """Thesis case 1 (l_d 7, Mz 1000 N*mm), mesh resolution 0.5, wedged once for the tests below."""
+    from femcontact.dislodging import Puller
+    from femcontact.scene import load_scene
+
+    scene = load_scene(Path(__file__).parent.parent / "scenes" / "dislodging_2d.toml",
+                       ["mesh.resolution=0.5", "dislodging.tolerance=0.02"])
+    return Puller(scene)
+
+
+def test_one_dof_first_slip_reproduces_the_fe_pullout(wedged_peg):
+    """The wedge lets go when the contact whose friction already points down (A, preload
+    -T_A ~ 0.14 N_A, the slope l_d/d of the line of the contacts) reaches mu N_A, with the pull
+    shared equally by the two contacts: 2 (T_A + mu N_A). Measured at resolution 1: 5.83 N
+    against the FE's 5.61 N (3.9 %); 6 % allowed on the coarse mesh. Both contacts sliding
+    (the 1-DOF full-slide force, 18.9 N) is never reached: a peg free to turn pivots about B."""
+    pullout = wedged_peg.pullout["quasi_static_pullout_N"]
+    assert pullout == pytest.approx(wedged_peg.one_dof["first_slip"], rel=0.06)
+    assert pullout < 0.4 * wedged_peg.one_dof["full_slide"]
+    contacts = wedged_peg.contacts
+    assert -contacts["T_A"] / contacts["N_A"] == pytest.approx(7.0 / 50.0, rel=0.05)
+
+
+def test_continuous_pull_dislodges_just_above_the_quasi_static_pullout(wedged_peg):
+    """A constant pull 2 % under the quasi-static pull-out force holds (the run settles and stops
+    early); 2 % over it dislodges (both contact zones open) within a millisecond. The impulse of
+    a constant pull is F t_event exactly, the frame impulse F ceil(t_event / 0.005) 0.005."""
+    pullout = wedged_peg.pullout["quasi_static_pullout_N"]
+    below = wedged_peg.pull(0.98 * pullout, "continuous")
+    assert not below["dislodged"] and below["settled"] and abs(below["rise_at_end_mm"]) < 1e-3
+    above = wedged_peg.pull(1.02 * pullout, "continuous")
+    assert above["dislodged"] and above["event"] == "open" and 0 < above["dislodge_time_s"] < 1e-3
+    force = 1.02 * pullout
+    assert above["impulse_Ns"] == pytest.approx(force * above["dislodge_time_s"], rel=1e-9)
+    assert above["impulse_frames_Ns"] == pytest.approx(force * 0.005, rel=1e-9)
