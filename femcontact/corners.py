@@ -88,7 +88,7 @@ class RigidCorners:
             kappa_t = float(p.constants["gamma_t"].value * p.constants["E"].value)
             trial = self.tangential_old[k] - kappa_t * (slip @ tangent)
             bound = float(p.constants["mu"].value) * f_n
-            stick = abs(trial) <= bound if state is None else state[1]
+            stick = abs(trial) < bound if state is None else state[1]  # a corner at the bound keeps slipping
             f_t = trial if stick else np.sign(trial if state is None else state[2]) * bound
             force = force + f_t * tangent
             return force, s, gap, (active, stick, np.sign(trial)), f_t
