@@ -15,6 +15,7 @@ COMMANDS = {
     "study": ("femcontact.study", "run the cases of a study that are not done yet"),
     "report": ("femcontact.report", "write the plots, snapshots and summary of a study"),
     "rcc": ("femcontact.rcc_cli", "remote-centre-compliance device: wrench, displace, centre"),
+    "hertz": ("femcontact.hertz_cli", "Hertz benchmark (reference §5) at one contact-zone size"),
 }
 
 
