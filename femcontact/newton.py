@@ -169,6 +169,7 @@ class SchurNewton:
         """Solve one increment; returns the Newton iterations taken."""
         p, options = self.problem, self.problem.scene["solver"]
         history = []
+        capped = None  # the last rigid step, if it was held at the trust-region cap
         residual = self.assemble_residual(load)
         for iteration in range(options["max_iterations"] + 1):
             R_u, R_r, scale = residual
@@ -181,6 +182,13 @@ class SchurNewton:
             if iteration == options["max_iterations"]:
                 break
             du, dr = self.direction(load, R_u, R_r)
+            if self._at_cap(dr):
+                if capped is not None and capped @ dr < 0:
+                    raise NewtonFailure("the rigid step swings back and forth at the trust-region cap "
+                                        "(the body has no stiffness in some direction)", history)
+                capped = dr
+            else:
+                capped = None
             residual = self.line_search(load, du, dr, (R_u, R_r, scale))
         raise NewtonFailure(f"no convergence in {options['max_iterations']} iterations", history)
 
@@ -262,6 +270,13 @@ class SchurNewton:
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
         cap = p.model.h_contact
         return dr * min(1.0, cap / length) if length > 0 else dr
+
+    def _at_cap(self, dr) -> bool:
+        """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""
+        p = self.problem
+        size = p.shape["scale"]
+        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)).max()
+        return bool(length >= (1 - 1e-9) * p.model.h_contact)
 
     def update_anchors(self) -> None:
         """Move each contact node's stick anchor so that -gamma_T (xi - anchor) equals the
