@@ -15,7 +15,7 @@ from mpi4py import MPI
 from femcontact.errors import InputError
 
 
-STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
+STABILIZATION_FACTORS = (1.0, 1e-1, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
 STABILIZATION_TOLERANCE = 1e-3
 """Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
