@@ -112,7 +112,8 @@ SOLVER = {
                   "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
                   positive=True),
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
-    "line_search": Field("bool", True, "backtracking line search on the residual norm"),
+    "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
+                         "root of R.d or backtracking"),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }
