@@ -340,16 +340,16 @@ class SchurNewton:
             return trial
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
-            a_lo, (a_hi, g_hi) = 0.0, (1.0, g1)
+            a_lo, a_hi, (a, g) = 0.0, 1.0, (1.0, g1)
             for _ in range(3):
-                # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through (a_hi, g_hi)
-                c = (g_hi - g0 + g0 * a_hi) / (a_hi * a_hi)
+                # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
+                c = (g - g0 + g0 * a) / (a * a)
                 alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
                 if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
-                g = self._slope(trial, du, dr)
+                a, g = alpha, self._slope(trial, du, dr)
                 if not np.isfinite(g):
                     break
                 if abs(g) <= 0.5 * abs(g0):
@@ -357,7 +357,7 @@ class SchurNewton:
                 if g < 0:
                     a_lo = alpha
                 else:
-                    a_hi, g_hi = alpha, g
+                    a_hi = alpha
             if a_lo > 0:
                 self._update(u0, r0, du, dr, a_lo)
                 return self.assemble_residual(load)
