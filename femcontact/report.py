@@ -7,11 +7,13 @@ report shows exactly what is on disk.
 """
 import json
 import math
+import os
 import re
 import sys
 from pathlib import Path
 
 from femcontact.errors import InputError
+from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.study import flatten, get_key, load_study
 
 
@@ -26,7 +28,7 @@ def command(args) -> int:
     from femcontact.database import Database
 
     study = load_study(args.study, args.set, args.results)
-    study.results.mkdir(parents=True, exist_ok=True)
+    make_dir(study.results)
     database = Database(study.database, study.keys)
     database.rebuild(study.cases)
     csv = database.export_csv(study.results / "results.csv")
@@ -90,7 +92,7 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
     if series:
         axes.legend()
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{y}_vs_{x}") + ".png")
-    figure.savefig(path, dpi=120)
+    write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
 
@@ -155,7 +157,7 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
     axes.grid(True, alpha=0.3)
     axes.legend(fontsize=7)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
-    figure.savefig(path, dpi=120)
+    write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
 
@@ -210,10 +212,15 @@ def write_snapshots(study, rows: dict) -> list[Path]:
         if not fields.exists():
             print(f"  (no snapshot of {case.id}: {fields} missing; does the solver write it?)", file=sys.stderr)
             continue
-        (study.results / "snapshots").mkdir(exist_ok=True)
+        make_dir(study.results / "snapshots")
         path = study.results / "snapshots" / f"{case.id}.png"
-        snapshot.render(fields, path, zoom=settings["zoom"] or None, scale=settings["scale"],
-                        zoom_radius=settings["zoom_radius"])
+        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")  # rendered whole, then renamed
+        try:
+            snapshot.render(fields, tmp, zoom=settings["zoom"] or None, scale=settings["scale"],
+                            zoom_radius=settings["zoom_radius"])
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
         paths.append(path)
     return paths
 
@@ -245,7 +252,7 @@ def write_summary(study, columns: list[str], rows: list[dict], plots, snapshots)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots]
     lines += [""] + [f"![{p.stem}](snapshots/{p.name})" for p in snapshots]
     path = study.results / "summary.md"
-    path.write_text("\n".join(lines).rstrip() + "\n")
+    write_text_atomic(path, "\n".join(lines).rstrip() + "\n")
     return path
 
 

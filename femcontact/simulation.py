@@ -86,11 +86,12 @@ class Simulation:
             directory.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         corners = p.corners
-        np.savez(directory / f"rank{comm.rank}.npz", r_old=p.rigid.r_old.value, tangential_old=corners.tangential_old,
-                 corner_old=corners.corner_old, corner_u_old=corners.u_old, **p.state())
-        if comm.rank == 0:
-            from femcontact.run import write_json_atomic
+        from femcontact.io import write_atomic, write_json_atomic
 
+        write_atomic(directory / f"rank{comm.rank}.npz", lambda stream: np.savez(
+            stream, r_old=p.rigid.r_old.value, tangential_old=corners.tangential_old, corner_old=corners.corner_old,
+            corner_u_old=corners.u_old, **p.state()), binary=True)
+        if comm.rank == 0:
             write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
                                                               "history": self.history})
 
@@ -194,11 +195,14 @@ class Simulation:
     def write_history(self, path: Path) -> None:
         if self.problem.mesh.comm.rank != 0 or not self.history:
             return
-        keys = list(self.history[0])
-        with open(path, "w", newline="") as stream:
-            writer = csv.DictWriter(stream, fieldnames=keys, extrasaction="ignore")
+        from femcontact.io import write_atomic
+
+        def write(stream):
+            writer = csv.DictWriter(stream, fieldnames=list(self.history[0]), extrasaction="ignore")
             writer.writeheader()
             writer.writerows(self.history)
+
+        write_atomic(path, write)
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""
@@ -233,7 +237,14 @@ def run_scene(scene: dict, case_dir: Path, checkpoint: bool = False, restart=Non
     if checkpoint:
         simulation.save_checkpoint(case_dir / "checkpoint")
     start = time.perf_counter()
-    simulation.write_history(case_dir / "history.csv")
+    error = None
+    try:
+        simulation.write_history(case_dir / "history.csv")
+    except InputError as failure:  # a WriteError (rank 0 only): every rank stops, none waits in write_fields
+        error = failure
+    error = simulation.problem.mesh.comm.allreduce([error] if error else [], op=MPI.SUM)
+    if error:
+        raise error[0]
     write_fields(simulation, case_dir)
     simulation.timings["output"] += time.perf_counter() - start
     metrics = summary_metrics(simulation)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from femcontact.errors import InputError
+from femcontact.io import WriteError, describe, make_dir, write_json_atomic, write_text_atomic
 from femcontact.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.scene import case_id, read_toml, resolve
 
@@ -347,18 +348,20 @@ class Runner:
         return command
 
     def start(self, case: Case, slot: int) -> None:
-        case.dir.mkdir(parents=True, exist_ok=True)
-        (case.dir / "result.json").unlink(missing_ok=True)
-        (case.dir / "scene.toml").write_text(to_toml(case.scene))
+        make_dir(case.dir)
         command = self.command(case)
-        _write_json(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                               "slot": slot, "started": time.time()})
-        env = {**os.environ, "XDG_CACHE_HOME": str(self.cache_root / f"slot-{slot}"), "PYTHONUNBUFFERED": "1"}
-        env.setdefault("OMP_NUM_THREADS", "1")
-        with open(case.dir / "log.txt", "wb") as log:
-            process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT, env=env,
-                                       stdin=subprocess.DEVNULL, start_new_session=True,
-                                       preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+        try:
+            (case.dir / "result.json").unlink(missing_ok=True)
+            write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
+            write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
+                                                         "slot": slot, "started": time.time()})
+            with open(case.dir / "log.txt", "wb") as log:
+                process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
+                                           env=launch_environment(self.cache_root / f"slot-{slot}"),
+                                           stdin=subprocess.DEVNULL, start_new_session=True,
+                                           preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+        except OSError as error:
+            raise WriteError(describe(error, case.dir)) from None
         self.running.append(Job(case, process, slot, time.monotonic()))
 
     def poll(self) -> list[tuple[Case, dict]]:
@@ -379,9 +382,9 @@ class Runner:
                 reason = job.killed or _exit_reason(job.process.returncode, job.case.dir / "log.txt")
                 result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
                           "info": {"ranks": self.ranks}}
-                _write_json(job.case.dir / "result.json", result)
+                write_json_atomic(job.case.dir / "result.json", result)
             runner = json.loads((job.case.dir / "runner.json").read_text())
-            _write_json(job.case.dir / "runner.json", {**runner, "wall": elapsed})
+            write_json_atomic(job.case.dir / "runner.json", {**runner, "wall": elapsed})
             finished.append((job.case, result))
         return finished
 
@@ -416,10 +419,10 @@ class Runner:
                 if prefix is not None and prefix["status"] != "ok":
                     result = {"status": "failed", "reason": f"shared prefix {case.prefix.id} failed: "
                               f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
-                    case.dir.mkdir(parents=True, exist_ok=True)
-                    (case.dir / "scene.toml").write_text(to_toml(case.scene))
-                    _write_json(case.dir / "runner.json", self.provenance)
-                    _write_json(case.dir / "result.json", result)
+                    make_dir(case.dir)
+                    write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
+                    write_json_atomic(case.dir / "runner.json", self.provenance)
+                    write_json_atomic(case.dir / "result.json", result)
                     self._finish(case, result)
                     continue
                 self.start(case, free.pop(0))
@@ -445,16 +448,39 @@ def _signal_group(process: subprocess.Popen, sig: int) -> None:
         pass
 
 
+def launch_environment(cache: Path) -> dict:
+    """Environment of a case's launch: its own JIT cache, unbuffered output, one thread per rank,
+    and what Open MPI needs to start at all, as the Makefile sets it: run as root (containers)
+    and more ranks than cores. Values already set are kept."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(cache), "PYTHONUNBUFFERED": "1"}
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env.setdefault(name, "1")
+    env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    if os.geteuid() == 0:
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    return env
+
+
+def _is_rule(line: str) -> bool:
+    """A banner line of dashes, equals signs or stars (Open MPI frames its messages in them)."""
+    return len(line) >= 3 and not line.strip("-=*")
+
+
 def _exit_reason(code: int, log: Path) -> str:
+    """Why a case ended without a result: the exit status and the log's own error, i.e. its last
+    line, or for a message framed in banner lines (an MPI launcher's) the framed text."""
     how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
-    lines = [line for line in log.read_text(errors="replace").splitlines() if line.strip()] if log.exists() else []
-    return f"{how} without a result" + (f"; last log line: {lines[-1].strip()[:300]}" if lines else "")
-
-
-def _write_json(path: Path, data) -> None:
-    from femcontact.run import write_json_atomic
-
-    write_json_atomic(path, data)
+    lines = [line.strip() for line in log.read_text(errors="replace").splitlines() if line.strip()] \
+        if log.exists() else []
+    while lines and _is_rule(lines[-1]):
+        lines.pop()
+        framed = []
+        while lines and not _is_rule(lines[-1]):
+            framed.insert(0, lines.pop())
+        if framed:
+            return f"{how} without a result; launcher: {' '.join(framed)[:300]}"
+    return f"{how} without a result" + (f"; last log line: {lines[-1][:300]}" if lines else "")
 
 
 # -- progress -------------------------------------------------------------------------------------
@@ -533,15 +559,22 @@ def command(args) -> int:
 
     from femcontact.database import Database
 
+    if args.jobs is not None and args.jobs < 0:
+        raise InputError(f"--jobs {args.jobs}: expected >= 0 (0 = cores // ranks per case)")
+    if args.ranks_per_case is not None and args.ranks_per_case < 1:
+        raise InputError(f"--ranks-per-case {args.ranks_per_case}: expected >= 1")
     study = load_study(args.study, args.set, args.results)
     settings = study.settings
-    ranks = args.ranks_per_case or settings["ranks_per_case"]
+    ranks = args.ranks_per_case if args.ranks_per_case is not None else settings["ranks_per_case"]
     jobs = args.jobs if args.jobs is not None else settings["jobs"]
-    if jobs < 0 or ranks < 1:
-        raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
     jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
-    study.results.mkdir(parents=True, exist_ok=True)
-    lock = open(study.results / ".lock", "w")
+    if args.list:  # reads the case directories only: works on a read-only results directory
+        return _list(study)
+    make_dir(study.results)
+    try:
+        lock = open(study.results / ".lock", "w")
+    except OSError as error:
+        raise WriteError(describe(error, study.results / ".lock")) from None
     try:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
@@ -549,8 +582,6 @@ def command(args) -> int:
 
     database = Database(study.database, study.keys)
     database.rebuild(study.cases)  # the case directories are the truth
-    if args.list:
-        return _list(study)
     todo = [case for case in study.cases if _needs_run(case, args)]
     prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
                      and (args.force or (read_result(case.prefix.dir) or {}).get("status") != "ok")}.values())
@@ -570,6 +601,11 @@ def command(args) -> int:
         print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
               "run the same command again to continue", file=sys.stderr)
         return 130
+    except WriteError as error:  # disk full, file system gone read-only: stop, keep what is recorded
+        progress.close()
+        runner.stop_all()
+        raise WriteError(f"study {settings['name']}: stopped after {progress.done} of {len(todo)} cases: {error}; "
+                         "every finished case is recorded; run the same command again to continue") from None
     finally:
         signal.signal(signal.SIGTERM, previous)
     progress.close()
