@@ -17,6 +17,7 @@ Table `cases`, columns in CSV order:
 import contextlib
 import csv
 import json
+import os
 import sqlite3
 import tomllib
 from pathlib import Path
@@ -77,7 +78,11 @@ class Database:
             self.connection = sqlite3.connect(self.path, isolation_level=None)  # explicit transactions
             self.connection.execute("PRAGMA journal_mode=WAL")
         except sqlite3.Error as error:
-            raise WriteError(f"{self.path}: cannot open the results database ({error})") from None
+            where = "" if os.access(self.path.parent, os.W_OK) else f"; {self.path.parent} is not writable"
+            raise WriteError(f"{self.path}: cannot write the results database ({error}{where})") from None
+
+    def close(self) -> None:
+        self.connection.close()
 
     def columns(self) -> list[str]:
         return [row[1] for row in self.connection.execute("PRAGMA table_info(cases)")]

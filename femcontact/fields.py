@@ -11,7 +11,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from femcontact.errors import InputError
-from femcontact.io import write_atomic
+from femcontact.io import write_npz_atomic
 from femcontact.obstacle import outline
 
 
@@ -69,8 +69,8 @@ def _write_npz(p, gathered, case_dir: Path) -> None:
         local_points = shape_outline[:, : p.dim] + reference_point(p.model.rigid)
         placed = np.array([rigid.place(point) for point in local_points])
         shape_outline = np.c_[placed, np.zeros((len(placed), 3 - p.dim))]
-    write_atomic(Path(case_dir) / "fields.npz", lambda stream: np.savez_compressed(
-        stream,
+    write_npz_atomic(
+        Path(case_dir) / "fields.npz",
         points=np.vstack([g[0] for g in gathered]),
         cells=np.vstack([g[1] + offset for g, offset in zip(gathered, offsets)]),
         cell_type="triangle" if p.dim == 2 else "tetra",
@@ -79,4 +79,4 @@ def _write_npz(p, gathered, case_dir: Path) -> None:
         rigid_outline=shape_outline,
         named_point_names=np.array(list(p.model.points)),
         named_point_coords=np.array([np.r_[x, np.zeros(3 - p.dim)] for x in p.model.points.values()]),
-    ), binary=True)
+    )

@@ -56,6 +56,18 @@ def write_atomic(path, writer, binary: bool = False) -> Path:
     return path
 
 
+def write_npz_atomic(path, compressed: bool = True, **arrays) -> Path:
+    """numpy's .npz of `arrays`, built in memory and then written atomically (a zip archive
+    interrupted half-way would leave an unclosable ZipFile behind)."""
+    import io
+
+    import numpy as np
+
+    buffer = io.BytesIO()
+    (np.savez_compressed if compressed else np.savez)(buffer, **arrays)
+    return write_atomic(path, lambda stream: stream.write(buffer.getbuffer()), binary=True)
+
+
 def write_text_atomic(path, text: str) -> Path:
     return write_atomic(path, lambda stream: stream.write(text))
 

@@ -30,14 +30,18 @@ def command(args) -> int:
     study = load_study(args.study, args.set, args.results)
     make_dir(study.results)
     database = Database(study.database, study.keys)
-    database.rebuild(study.cases)
-    csv = database.export_csv(study.results / "results.csv")
-    rows = database.rows()
+    try:
+        database.rebuild(study.cases)
+        csv = database.export_csv(study.results / "results.csv")
+        rows = database.rows()
+        columns = database.csv_columns()
+    finally:
+        database.close()
     for row in rows:
         row["scene"] = json.loads(row["scene"]) if row["scene"] else {}
     plots = [write_plot(spec, rows, study.results) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
-    summary = write_summary(study, database.csv_columns(), rows, plots, snapshots)
+    summary = write_summary(study, columns, rows, plots, snapshots)
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
     print(f"  table:     {summary}\n  data:      {csv} and {study.database}")
     for path in plots:

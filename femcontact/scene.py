@@ -161,6 +161,9 @@ def contact_schema(dim: int, geometry: str) -> dict:
         schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
+        step = {**STEP, "load_point": Field("str", "indenter", "named point where the force acts: 'indenter' "
+                                            "(its reference point), 'contact' or 'reference'")}
+        schema["steps"] = TableList(step, schema["steps"].doc)
     return schema
 
 

@@ -86,11 +86,11 @@ class Simulation:
             directory.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         corners = p.corners
-        from femcontact.io import write_atomic, write_json_atomic
+        from femcontact.io import write_json_atomic, write_npz_atomic
 
-        write_atomic(directory / f"rank{comm.rank}.npz", lambda stream: np.savez(
-            stream, r_old=p.rigid.r_old.value, tangential_old=corners.tangential_old, corner_old=corners.corner_old,
-            corner_u_old=corners.u_old, **p.state()), binary=True)
+        write_npz_atomic(directory / f"rank{comm.rank}.npz", compressed=False, r_old=p.rigid.r_old.value,
+                         tangential_old=corners.tangential_old, corner_old=corners.corner_old,
+                         corner_u_old=corners.u_old, **p.state())
         if comm.rank == 0:
             write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
                                                               "history": self.history})

@@ -581,6 +581,16 @@ def command(args) -> int:
         raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
 
     database = Database(study.database, study.keys)
+    try:
+        return _run(study, args, database, jobs, ranks)
+    finally:
+        database.close()
+        lock.close()
+
+
+def _run(study: Study, args, database, jobs: int, ranks: int) -> int:
+    """Run the cases of a locked study that need it; returns the exit code."""
+    settings = study.settings
     database.rebuild(study.cases)  # the case directories are the truth
     todo = [case for case in study.cases if _needs_run(case, args)]
     prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
