@@ -46,7 +46,8 @@ SCHEMA = {
         "ranks_per_case": Field("int", 1, "MPI ranks per case", min=1),
         "time_limit": Field("float", 600.0, "seconds per case; a case past it is killed and recorded failed",
                             positive=True),
-        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks"),
+        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
+                          check=lambda v: _check_launcher(v)),
         "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
     },
     "scene": _TABLE,
@@ -100,6 +101,19 @@ def _check_lists(table, same_length: bool) -> str | None:
         return f"{bad[0]} must be a non-empty list of values"
     if same_length and len({len(values) for values in lists.values()}) > 1:
         return "zipped lists must have one length: " + ", ".join(f"{k} has {len(v)}" for k, v in lists.items())
+    return None
+
+
+def _check_launcher(launcher: str) -> str | None:
+    """A complaint about a launcher command, or None: it must format with {ranks} alone and name a program."""
+    import shutil
+
+    try:
+        words = shlex.split(launcher.format(ranks=1))
+    except (KeyError, IndexError, ValueError) as error:
+        return f"cannot be read ({type(error).__name__}: {error}); the only placeholder is {{ranks}}"
+    if words and shutil.which(words[0]) is None:
+        return f"{words[0]!r}: no such program"
     return None
 
 
@@ -355,13 +369,17 @@ class Runner:
             write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
             write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
                                                          "slot": slot, "started": time.time()})
-            with open(case.dir / "log.txt", "wb") as log:
+            log = open(case.dir / "log.txt", "wb")
+        except OSError as error:
+            raise WriteError(describe(error, case.dir)) from None
+        with log:
+            try:
                 process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
                                            env=launch_environment(self.cache_root / f"slot-{slot}"),
                                            stdin=subprocess.DEVNULL, start_new_session=True,
                                            preexec_fn=functools.partial(_die_with_parent, os.getpid()))
-        except OSError as error:
-            raise WriteError(describe(error, case.dir)) from None
+            except OSError as error:
+                raise InputError(f"study.launcher: cannot start {command[0]!r} ({error.strerror})") from None
         self.running.append(Job(case, process, slot, time.monotonic()))
 
     def poll(self) -> list[tuple[Case, dict]]:
@@ -611,10 +629,10 @@ def _run(study: Study, args, database, jobs: int, ranks: int) -> int:
         print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
               "run the same command again to continue", file=sys.stderr)
         return 130
-    except WriteError as error:  # disk full, file system gone read-only: stop, keep what is recorded
+    except InputError as error:  # disk full, read-only, launcher gone: stop, keep what is recorded
         progress.close()
         runner.stop_all()
-        raise WriteError(f"study {settings['name']}: stopped after {progress.done} of {len(todo)} cases: {error}; "
+        raise type(error)(f"study {settings['name']}: stopped after {progress.done} of {len(todo)} cases: {error}; "
                          "every finished case is recorded; run the same command again to continue") from None
     finally:
         signal.signal(signal.SIGTERM, previous)

@@ -232,7 +232,29 @@ def test_study_refuses_bad_files_and_options(tmp_path, capsys):
     assert_refused(*cli(capsys, "study", path, "--results", results), "gone.toml: no such file")
     path = study_file(tmp_path, "", settings="time_limit = inf")
     assert_refused(*cli(capsys, "study", path, "--results", results), "study.time_limit = inf")
+    for launcher, fragment in (("mpirn -n {ranks}", "'mpirn': no such program"),
+                               ("mpirun -n {rank}", "KeyError: 'rank'"), ("mpirun '-n", "ValueError")):
+        path = study_file(tmp_path, "")
+        path.write_text(path.read_text().replace(f"{FAKE} -n {{ranks}}", launcher))
+        assert_refused(*cli(capsys, "study", path, "--results", results), "study.launcher", fragment)
     assert not results.exists()
+
+
+def test_rcc_study_prevalidation_refuses_nan(tmp_path, capsys):
+    path = tmp_path / "rcc.toml"
+    path.write_text(f'[study]\nname = "rcc"\nscene = "{RCC}"\n[sweep]\ngrid = {{ "motion.about_z" = [0.0, nan] }}\n')
+    assert_refused(*cli(capsys, "study", path, "--results", tmp_path / "results"),
+                   "motion.about_z = nan: not a finite number")
+    assert not (tmp_path / "results").exists()
+
+
+def test_outputs_that_are_files(tmp_path, capsys):
+    occupied = tmp_path / "occupied"
+    occupied.write_text("a file")
+    assert_refused(*cli(capsys, "run", RCC, "--out", occupied), str(occupied), "cannot write (File exists)")
+    path = study_file(tmp_path, "")
+    assert_refused(*cli(capsys, "study", path, "--results", occupied), str(occupied / "demo"), "cannot write")
+    assert occupied.read_text() == "a file"
 
 
 # -- read-only and full results directories --------------------------------------------------------
