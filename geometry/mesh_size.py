@@ -33,52 +33,71 @@ def _chamfer(width: float, angle: float) -> float:
     return math.hypot(width, width / math.tan(math.radians(angle))) if width > 0 else 0.0
 
 
+def size_keys(scene: dict) -> list[str]:
+    """The scene keys that set the size of the meshed body."""
+    if scene["geometry"] == "block":
+        return ["block.width", "block.height"] + (["block.depth"] if scene["dim"] == 3 else [])
+    if scene["rigid"] == "hole":
+        return ["peg.width", "peg.length"]
+    return ["hole.block_width", "hole.depth"] + (["hole.bottom_thickness"] if scene["hole"]["kind"] == "single" else [])
+
+
 def _body(scene: dict, sz):
     """(measure of the meshed body in mm^2 or mm^3, M(d): its measure within distance d of the
-    fine set, the smallest distance (-zone for balls: h_c inside them), the keys that set its size)."""
+    fine set, the smallest distance (-zone for balls: h_c inside them))."""
     dim, z = scene["dim"], sz.zone
     if scene["geometry"] == "block":
         block, flat = scene["block"], scene["indenter"]["shape"] == "flat"
-        keys = ["block.width", "block.height"] + (["block.depth"] if dim == 3 else [])
         if dim == 2:
             zone = max(1, round(z / sz.h_contact)) * sz.h_contact
-            return block["width"] * block["height"], lambda d: 2 * zone * d + math.pi * d * d / 2, 0.0, keys
+            return block["width"] * block["height"], lambda d: 2 * zone * d + math.pi * d * d / 2, 0.0
         volume = block["width"] * block["depth"] * block["height"]
         if flat:  # a disc of radius z on the top face
             return volume, lambda d: math.pi * z * z * d + math.pi ** 2 * z * d * d / 2 + 2 * math.pi * d ** 3 / 3, \
-                0.0, keys
-        return volume, lambda d: block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0, keys  # a strip |x| <= z
+                0.0
+        return volume, lambda d: block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0  # a strip |x| <= z
     peg, hole = scene["peg"], scene["hole"]
     D, bw, depth, bt = hole["width"], hole["block_width"], hole["depth"], hole["bottom_thickness"]
     if scene["rigid"] == "peg":
-        keys = ["hole.block_width", "hole.depth"] + (["hole.bottom_thickness"] if hole["kind"] == "single" else [])
         if dim == 2:
             measure = 2 * bw * depth if hole["kind"] == "two_blocks" else (D + 2 * bw) * (depth + bt) - D * depth
         else:
             measure = (D + 2 * bw) ** 2 * (depth + bt) - math.pi * D * D / 4 * depth
         fine = 8 * z + 2 * _chamfer(hole["chamfer_width"], hole["chamfer_angle"])
     else:
-        keys = ["peg.width", "peg.length"]
         measure = peg["width"] * peg["length"] if dim == 2 else math.pi * peg["width"] ** 2 / 4 * peg["length"]
         fine = 8 * z + 2 * _chamfer(peg["chamfer_width"], peg["chamfer_angle"])
     if dim == 2:  # fine stretches of total length `fine` on the boundary, six of them (their ends)
-        return measure, lambda d: fine * d + 3 * math.pi * d * d, 0.0, keys
+        return measure, lambda d: fine * d + 3 * math.pi * d * d, 0.0
     # balls of radius z around the two contact points, about half of each inside the body
-    return measure, lambda d: 4 * math.pi / 3 * (z + d) ** 3, -z, keys
+    return measure, lambda d: 4 * math.pi / 3 * (z + d) ** 3, -z
 
 
 def estimate(scene: dict, sz) -> float:
-    """Estimated number of elements (triangles or tetrahedra) of the scene's mesh at sizes `sz`."""
-    dim = scene["dim"]
-    measure, within, start, _ = _body(scene, sz)
+    """Estimated number of elements (triangles or tetrahedra) of the scene's mesh at sizes `sz`;
+    inf when the sizes overflow double precision."""
+    try:
+        with np.errstate(all="ignore"):
+            elements = _integrate(scene, sz)
+    except OverflowError:
+        return math.inf
+    return elements if math.isfinite(elements) else math.inf  # NaN only from inf - inf: beyond any limit
+
+
+def _integrate(scene: dict, sz) -> float:
+    dim, c = scene["dim"], ELEMENT[scene["dim"]]
+    measure, within, start = _body(scene, sz)
     h_c, h_max, g = sz.h_contact, sz.h_max, gmsh_tools.GRADING / sz.resolution
-    d_max = (h_max - h_c) / g
-    d = start + np.r_[0.0, np.geomspace(1e-9 * (d_max - start), d_max - start, 2000)]
-    covered = np.minimum([within(x) for x in d], measure)
+    extent = 10 * sum(_get(scene, key) for key in size_keys(scene))  # beyond: no part of the body left
+    d_max = min((h_max - h_c) / g, extent)
+    if not d_max > 0:  # one size everywhere
+        return measure / (c * h_c ** dim)
+    d = start + np.r_[0.0, np.geomspace(1e-3 * h_c, d_max - start, 2000)]
+    covered = np.minimum(within(d), measure)
     h = np.minimum(h_max, h_c + g * np.maximum(d, 0.0))
     h_mid = 0.5 * (h[1:] + h[:-1])
-    c = ELEMENT[dim]
-    return float(np.sum(np.diff(covered) / (c * h_mid ** dim)) + max(measure - covered[-1], 0.0) / (c * h_max ** dim))
+    h_end = min(h_max, h_c + g * d_max)
+    return float(np.sum(np.diff(covered) / (c * h_mid ** dim)) + max(measure - covered[-1], 0.0) / (c * h_end ** dim))
 
 
 def check(scene: dict, sz=None) -> float:
@@ -96,7 +115,7 @@ def check(scene: dict, sz=None) -> float:
                             "mesh.resolution, lower mesh.contact_size or raise mesh.contact_zone")
     elements = estimate(scene, sz)
     if elements > MAX_ELEMENTS:
-        keys = _body(scene, sz)[3]
+        keys = size_keys(scene)
         sizes = ", ".join(f"{key} = {_get(scene, key):g}" for key in keys)
         raise GeometryError(f"mesh too large: about {elements:.2g} elements, more than {MAX_ELEMENTS:.0e} "
                             f"({settings}; {sizes}); lower mesh.resolution, raise mesh.contact_size or "

@@ -68,6 +68,7 @@ RUN_CASES = [
     (["mesh.contact_size=1e-7"], ["mesh too large", "mesh.contact_size"]),
     (["hole.block_width=1e6"], ["mesh too large", "hole.block_width = 1e+06"]),
     (["mesh.resolution=0.01"], ["mesh too coarse", "mesh.resolution = 0.01"]),
+    (["mesh.resolution=1e300"], ["mesh too large: about inf elements"]),
     # NaN and infinity, key by key
     (["contact.mu=nan"], ["contact.mu = nan: not a finite number"]),
     (["materials.hole.density=nan"], ["materials.hole.density = nan"]),
@@ -437,6 +438,17 @@ def test_wedge_angles_are_null_with_a_reason_when_contact_is_lost():
     assert metrics["angle_A_deg"] is None and metrics["angle_B_deg"] is None
     assert metrics["angle_reason"].startswith("zone B has no contact after release")
     assert metrics["wedged"] is False and metrics["wedge_reason"] == "not collinear"
+
+
+def test_mesh_guard_survives_overflowing_sizes(tmp_path, capsys):
+    """Sizes near the double-precision limit: refused or accepted, never an OverflowError."""
+    scene = str(SCENES / "wedging_3d.toml")
+    assert_refused(*cli(capsys, "run", scene, *sets("hole.block_width=1e300"), "--out", tmp_path / "o"),
+                   "mesh too large", "hole.block_width = 1e+300")
+    from femcontact.scene import load_scene
+
+    for overrides in (["mesh.size_max=1e300"], ["mesh.contact_zone=1e300", "mesh.resolution=0.5"]):
+        load_scene(WEDGING, overrides)  # a coarse or an all-fine mesh of a 2-D body: allowed
 
 
 def test_mesh_size_estimate_is_within_a_factor_of_three_of_gmsh():
