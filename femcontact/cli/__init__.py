@@ -6,19 +6,26 @@ provides `add_arguments(parser)` and `command(args) -> int`.
 """
 import argparse
 import importlib
+import os
 import sys
 
 from femcontact.errors import InputError
 
 COMMANDS = {
-    "run": ("femcontact.run", "run one scene and write its results"),
-    "study": ("femcontact.study", "run the cases of a study that are not done yet"),
-    "report": ("femcontact.report", "write the plots, snapshots and summary of a study"),
-    "rcc": ("femcontact.rcc_cli", "remote-centre-compliance device: wrench, displace, centre"),
+    "run": ("femcontact.cli.run", "run one scene and write its results"),
+    "study": ("femcontact.study.runner", "run the cases of a study that are not done yet"),
+    "report": ("femcontact.study.report", "write the plots, snapshots and summary of a study"),
+    "rcc": ("femcontact.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
 }
 
 
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+"""One BLAS/OpenMP thread per MPI rank unless the user set them: ranks, not threads, use the cores."""
+
+
 def main(argv=None) -> int:
+    for name in THREAD_VARIABLES:
+        os.environ.setdefault(name, "1")
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = argparse.ArgumentParser(prog="femcontact", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

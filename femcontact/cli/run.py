@@ -1,19 +1,19 @@
 """`femcontact run SCENE.toml`: run one scene and write its case directory.
 
-The case directory holds `scene.toml`'s resolved form (`scene.json`), a log and,
-written atomically as the very last thing, `result.json`:
+The case directory holds the resolved scene (`scene.json`), `history.csv` (one row per
+converged increment, streamed), `fields.npz` and, written atomically as the very last
+thing, `result.json`:
 {"status": "ok"|"failed", "reason": str|null, "metrics": {...}, "timings": {...}, "info": {...}}.
+Progress goes to standard error (`--quiet` silences it and the summary).
 Exit code 0 when ok, 1 when the simulation failed (reason recorded), 2 for bad input.
 """
-import json
-import os
 import sys
 import time
 import traceback
 from pathlib import Path
 
-from femcontact.errors import InputError
-from femcontact.scene import case_id, load_scene
+from femcontact.config.scene import case_id, load_scene
+from femcontact.io import write_json_atomic
 
 
 def add_arguments(parser):
@@ -21,7 +21,7 @@ def add_arguments(parser):
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="override a scene value, e.g. --set peg.insertion_depth=5")
     parser.add_argument("--out", default=None, help="case directory (default results/run/<case id>)")
-    parser.add_argument("--quiet", action="store_true", help="no summary table")
+    parser.add_argument("--quiet", action="store_true", help="no progress and no summary table")
     parser.add_argument("--checkpoint", action="store_true",
                         help="save the state after the last step in OUT/checkpoint/ (shared prefix of a study)")
     parser.add_argument("--restart", default=None, metavar="CHECKPOINT",
@@ -29,31 +29,10 @@ def add_arguments(parser):
                              "steps after the ones it holds")
 
 
-def write_json_atomic(path: Path, data) -> None:
-    """Write JSON to a temporary file, fsync it, then rename it into place."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w") as stream:
-        json.dump(data, stream, indent=1, sort_keys=True, default=float)
-        stream.flush()
-        os.fsync(stream.fileno())
-    os.replace(tmp, path)
-
-
-def simulate(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
-    """Run a resolved scene; returns {'metrics', 'timings', 'info'} or raises SimulationFailed."""
-    if scene["kind"] == "rcc":
-        if checkpoint or restart:
-            raise InputError("--checkpoint/--restart: an rcc case has no steps to share")
-        from femcontact import rcc
-
-        return rcc.run_case(scene, case_dir)
-    from femcontact import simulation
-
-    return simulation.run_scene(scene, case_dir, checkpoint, restart)
-
-
 def command(args) -> int:
     from mpi4py import MPI
+
+    from femcontact.scenarios.case import run_case
 
     scene = load_scene(args.scene, args.set)
     rank = MPI.COMM_WORLD.rank
@@ -64,12 +43,17 @@ def command(args) -> int:
     MPI.COMM_WORLD.barrier()
     start = time.perf_counter()
     try:
-        result = {"status": "ok", "reason": None, **simulate(scene, case_dir, args.checkpoint, args.restart)}
+        result = {"status": "ok", "reason": None,
+                  **run_case(scene, case_dir, args.checkpoint, args.restart, quiet=args.quiet)}
     except Exception as error:  # recorded, never a half-written result
+        from femcontact.solver.stepping import SimulationFailed
+
         reason = f"{type(error).__name__}: {error}"
-        result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
-                  "info": {"traceback": traceback.format_exc()}}
+        info = {} if isinstance(error, SimulationFailed) else {"traceback": traceback.format_exc()}
+        result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {}, "info": info}
         print(f"femcontact run: case failed: {reason}", file=sys.stderr)
+        if "traceback" in info:
+            print(info["traceback"], file=sys.stderr)
     result["timings"]["total"] = time.perf_counter() - start
     result["info"]["ranks"] = MPI.COMM_WORLD.size
     if rank == 0:

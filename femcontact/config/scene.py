@@ -12,7 +12,7 @@ import tomllib
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.schema import Field, TableList, parse_assignment, set_key, validate
+from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 
 EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress")
 RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
@@ -193,7 +193,7 @@ def resolve(data: dict, overrides=()) -> dict:
         set_key(data, *parse_assignment(text))
     kind = data.get("kind", "contact")
     if kind == "rcc":
-        from femcontact import rcc
+        from femcontact.rcc import device as rcc
 
         scene = validate(data, rcc.SCHEMA)
         rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running

@@ -21,6 +21,9 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from femcontact.effects.base import Effect
+from femcontact.physics.signed_distance import reference_point
+
 
 def corner_points(rigid: dict) -> np.ndarray:
     """Sharp corners of a 2-D rectangle in its shape frame about the reference point."""
@@ -30,14 +33,22 @@ def corner_points(rigid: dict) -> np.ndarray:
     return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
 
 
-class RigidCorners:
+class RigidCorners(Effect):
     """Node-to-segment contact of the rigid body's sharp corners (2-D, P1)."""
+    name = "rigid_corners"
+
+    @staticmethod
+    def applies(problem) -> bool:
+        """Built when the rigid shape has sharp corners, in 2-D with P1 elements."""
+        return problem.dim == 2 and problem.scene["mesh"]["degree"] == 1 and len(corner_points(problem.model.rigid)) > 0
 
     def __init__(self, problem):
-        self.problem = p = problem
-        self.points = corner_points(p.model.rigid) if p.dim == 2 and p.scene["mesh"]["degree"] == 1 else np.zeros((0, 2))
+        super().__init__(problem)
+        p = problem
+        self.points = corner_points(p.model.rigid)
         self.friction = "friction" in p.effects
-        self.segments = self._segments() if len(self.points) else np.zeros((0, 3), dtype=np.int32)
+        self.segments = self._segments()
+        self.active_count = 0
         self.search = 4 * p.model.h_contact
         n = len(self.points)
         self.tangential_old = np.zeros(n)
@@ -166,15 +177,14 @@ class RigidCorners:
         return dC_du, dC_dr
 
     # -- assembly into the Newton system ------------------------------------------------
-    def add_residual(self, vector: PETSc.Vec) -> int:
+    def add_contact_residual(self, vector: PETSc.Vec) -> None:
         """Add the corners' C entries to the contact vector's local form (before ghost update)."""
-        contributions, active = self.contributions(with_jacobian=False)
+        contributions, self.active_count = self.contributions(with_jacobian=False)
         with vector.localForm() as local:
             for dofs, entries, _, _ in contributions:
                 local.array[dofs] += entries
-        return active
 
-    def add_jacobian(self, matrices, kur, bc_dofs: set) -> None:
+    def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
         """Add dC/du to each matrix (local indices) and dC/dr to the kur vectors' local forms."""
         contributions, _ = self.contributions(with_jacobian=True)
         for matrix in matrices:
@@ -189,15 +199,24 @@ class RigidCorners:
                 with vector.localForm() as local:
                     local.array[dofs] += dC_dr[:, j]
 
-    def commit(self) -> None:
+    def commit(self, dt: float) -> None:
         p = self.problem
         self.tangential_old[:] = np.where(self.active, self.tangential, 0.0)
         self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 2)
         self.u_old = p.u.x.array.copy()
 
+    def state(self) -> dict:
+        return {"tangential_old": self.tangential_old.copy(), "corner_old": self.corner_old.copy(),
+                "u_old": self.u_old.copy()}
+
+    def restore(self, state: dict) -> None:
+        self.tangential_old[:] = state["tangential_old"]
+        self.corner_old, self.u_old = state["corner_old"].copy(), state["u_old"].copy()
+
+    def outputs(self) -> dict:
+        return {"corner_contacts": self.active_count}
+
 
 def _tip(problem) -> np.ndarray:
     """Offset from the reference-point frame to the tip-centred frame used by RigidBody.place."""
-    from femcontact.obstacle import reference_point
-
     return reference_point(problem.model.rigid)

@@ -10,7 +10,7 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.obstacle import outline
+from femcontact.physics.signed_distance import outline
 
 
 def _p1_fields(simulation):
@@ -42,7 +42,7 @@ def write_fields(simulation, case_dir: Path) -> None:
         rigid = p.rigid
         shape_outline = outline(p.model.rigid)
         if len(shape_outline):
-            from femcontact.obstacle import reference_point
+            from femcontact.physics.signed_distance import reference_point
 
             local_points = shape_outline[:, : p.dim] + reference_point(p.model.rigid)
             placed = np.array([rigid.place(point) for point in local_points])

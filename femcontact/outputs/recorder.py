@@ -11,7 +11,6 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-NODAL = ("pressure", "active", "stick", "slip", "area")
 
 
 class Recorder:
@@ -26,10 +25,15 @@ class Recorder:
         self.W = fem.FunctionSpace(p.mesh, ("DG", degree))
         self.von_mises = fem.Function(self.W, name="von_mises")
         self.von_mises_expression = fem.Expression(p.von_mises, self.W.element.interpolation_points())
-        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(NODAL))
+        pressure = p.contact.pressure
+        nodal = {"pressure": pressure, "active": ufl.conditional(ufl.gt(pressure, 0), 1.0, 0.0)}
+        for component in p.components:
+            nodal.update(component.nodal_outputs())
+        self.states = [name for name in nodal if name != "pressure"]  # counted per row as <name>_nodes
+        self.nodal_names = list(nodal) + ["area"]
+        values = list(nodal.values()) + [1.0]
+        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
         q = ufl.TestFunction(self.Q)
-        values = [p.pressure, ufl.conditional(ufl.gt(p.pressure, 0), 1.0, 0.0),
-                  p.stick if p.stick is not None else 0.0, p.slip if p.slip is not None else 0.0, 1.0]
         self.nodal_form = fem.form(sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact)
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
@@ -60,11 +64,12 @@ class Recorder:
             local.set(0.0)
         petsc.assemble_vector(vec, self.nodal_form)
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        n = self.Q.dofmap.index_map.size_local
-        values = self.nodal.x.array[: n * len(NODAL)].reshape(-1, len(NODAL))
+        n, k = self.Q.dofmap.index_map.size_local, len(self.nodal_names)
+        values = self.nodal.x.array[: n * k].reshape(-1, k)
         area = values[:, -1]
         where = area > 0
-        out = {name: np.where(where, values[:, i] / np.where(where, area, 1), 0.0) for i, name in enumerate(NODAL[:-1])}
+        out = {name: np.where(where, values[:, i] / np.where(where, area, 1), 0.0)
+               for i, name in enumerate(self.nodal_names[:-1])}
         out["coordinates"] = self.Q.tabulate_dof_coordinates()[:n]
         out["on_surface"] = where
         return out
@@ -108,16 +113,14 @@ class Recorder:
 
         nodal = self.nodal_values()
         row["max_pressure"] = self._max(float(nodal["pressure"].max(initial=0.0)))
-        row["corner_contacts"] = newton.corner_contacts
-        for state in ("active", "stick", "slip"):
+        for state in self.states:
             row[f"{state}_nodes"] = int(self._sum(int((nodal[state] > 0.5).sum())))
+        for component in p.components:
+            row.update(component.outputs())
         row["elastic_energy"] = self._sum(fem.assemble_scalar(self.energy))
         self.von_mises.interpolate(self.von_mises_expression)
         n = self.W.dofmap.index_map.size_local
         row["max_von_mises"] = self._max(float(self.von_mises.x.array[:n].max(initial=0.0)))
-        row["yielded"] = bool(row["max_von_mises"] > p.scene["materials"][self.deformable_name]["yield_stress"])
+        row["yielded"] = bool(row["max_von_mises"] > p.scene["materials"][p.deformable]["yield_stress"])
         return row
 
-    @property
-    def deformable_name(self) -> str:
-        return {"peg": "hole", "hole": "peg", "indenter": "block"}[self.problem.scene["rigid"]]

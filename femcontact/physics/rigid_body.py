@@ -10,41 +10,38 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from femcontact.obstacle import reference_point
-from femcontact.scene import RIGID_DOFS
+from femcontact.physics.rotation import rotation_numpy, rotation_ufl
+from femcontact.physics.signed_distance import reference_point
+from femcontact.config.scene import RIGID_DOFS
 
 
-def rotation_numpy(angles) -> np.ndarray:
-    """Rotation matrix: 2-D angle [rz], or 3-D Rz Ry Rx for [rx, ry, rz]."""
-    if len(angles) == 1:
-        c, s = np.cos(angles[0]), np.sin(angles[0])
-        return np.array([[c, -s], [s, c]])
-    rx, ry, rz = angles
-    Rx = np.array([[1, 0, 0], [0, np.cos(rx), -np.sin(rx)], [0, np.sin(rx), np.cos(rx)]])
-    Ry = np.array([[np.cos(ry), 0, np.sin(ry)], [0, 1, 0], [-np.sin(ry), 0, np.cos(ry)]])
-    Rz = np.array([[np.cos(rz), -np.sin(rz), 0], [np.sin(rz), np.cos(rz), 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
-
-
-def rotation_ufl(angles):
-    """The same rotation as a UFL matrix of UFL scalars."""
-    if len(angles) == 1:
-        c, s = ufl.cos(angles[0]), ufl.sin(angles[0])
-        return ufl.as_matrix([[c, -s], [s, c]])
-    rx, ry, rz = angles
-    Rx = ufl.as_matrix([[1, 0, 0], [0, ufl.cos(rx), -ufl.sin(rx)], [0, ufl.sin(rx), ufl.cos(rx)]])
-    Ry = ufl.as_matrix([[ufl.cos(ry), 0, ufl.sin(ry)], [0, 1, 0], [-ufl.sin(ry), 0, ufl.cos(ry)]])
-    Rz = ufl.as_matrix([[ufl.cos(rz), -ufl.sin(rz), 0], [ufl.sin(rz), ufl.cos(rz), 0], [0, 0, 1]])
-    return Rz * Ry * Rx
+def mass_properties(rigid: dict, density: float, dim: int):
+    """Mass (t) and principal moments of inertia about the reference point (t*mm^2) of a
+    rigid shape of `density` (t/mm^3); a 2-D body has unit thickness (1 mm), like its loads."""
+    shape = rigid["shape"]
+    if shape == "rectangle":
+        w, h = 2 * rigid["half_width"], rigid["length"]
+        m = density * w * h
+        return m, np.array([m * (w * w + h * h) / 12])
+    if shape == "disc":
+        m = density * np.pi * rigid["radius"] ** 2
+        return m, np.array([m * rigid["radius"] ** 2 / 2])
+    if shape == "cylinder":
+        R, L = rigid["radius"], rigid["length"]
+        m = density * np.pi * R * R * L
+        side = m * (3 * R * R + L * L) / 12
+        return m, np.array([side, side, m * R * R / 2])
+    return 0.0, np.zeros(1 if dim == 2 else 3)
 
 
 class RigidBody:
-    """Pose unknowns of the rigid body and their UFL images.
+    """Pose unknowns of the rigid body, their UFL images and its mass.
 
     `r` is a Constant wrapped in a ufl.variable so forms can be differentiated with
-    respect to the pose; `r_old` holds the pose at the last converged increment."""
+    respect to the pose; `r_old` holds the pose at the last converged increment.
+    `mass` (t) and `mass_matrix` (t, t*mm^2) are used only by effects that need them."""
 
-    def __init__(self, mesh, rigid: dict, modes: dict, mass: float):
+    def __init__(self, mesh, rigid: dict, modes: dict, mass: float, moments: np.ndarray):
         self.shape = rigid
         self.dim = mesh.geometry.dim
         self.names = RIGID_DOFS[self.dim]
@@ -59,6 +56,7 @@ class RigidBody:
         self.r_old = fem.Constant(mesh, self.values.copy())
         self.variable = ufl.variable(self.r)
         self.mass = mass
+        self.mass_matrix = np.diag(np.r_[[mass] * self.dim, moments])
 
     @property
     def free(self) -> np.ndarray:

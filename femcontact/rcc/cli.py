@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from femcontact import rcc
+from femcontact.rcc import device as rcc
 from femcontact.errors import InputError
 
 

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from femcontact.errors import InputError
-from femcontact.schema import Field
-from femcontact.truss import Truss, skew
+from femcontact.config.schema import Field
+from femcontact.rcc.truss import Truss, skew
 
 DOFS = ("x", "y", "z", "rx", "ry", "rz")
 WRENCH = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
@@ -237,10 +237,10 @@ def device_of(scene: dict) -> Rcc:
     return Rcc(r["b"], r["peg_length"], r["theta_l"], r["k"], r["offset_t"])
 
 
-def run_case(scene: dict, case_dir) -> dict:
+def run_case(scene: dict) -> dict:
     """The six single-dof test motions of a scene (as in the reference's tables): exact and
     design-formula wrenches and errors; the compliance centre unloaded, under the axial load
-    and after the lateral test motion. `case_dir` is unused (no files beyond result.json)."""
+    and after the lateral test motion."""
     start = time.perf_counter()
     device = device_of(scene)
     motion = scene["motion"]

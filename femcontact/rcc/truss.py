@@ -19,21 +19,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from femcontact.physics.rotation import rotation_numpy
+
 
 def skew(v) -> np.ndarray:
     """Matrix [v]x with [v]x w = v x w."""
     x, y, z = v
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def rotation_zyx(angles) -> np.ndarray:
-    """R = Rz(thz) Ry(thy) Rx(thx) for angles = (thx, thy, thz) in rad."""
-    cx, cy, cz = np.cos(angles)
-    sx, sy, sz = np.sin(angles)
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ ry @ rx
 
 
 def angles_zyx(rotation) -> np.ndarray:
@@ -225,7 +217,7 @@ class Truss:
             if s.motion is None:
                 continue
             t, angles, about = (np.asarray(v) for v in s.motion)
-            rot = np.eye(3) + skew(fraction * angles) if linear else rotation_zyx(fraction * angles)
+            rot = np.eye(3) + skew(fraction * angles) if linear else rotation_numpy(fraction * angles)
             state.rotations[s_index] = rot
             state.translations[s_index] = fraction * t + (rot - np.eye(3)) @ (s.point - about)
         self._place_rigid_sets(state)

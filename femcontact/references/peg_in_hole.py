@@ -1,62 +1,17 @@
 """Closed-form peg-in-hole relations (reference §1 and §4; Simunovic, Whitney).
 
-d: peg width/diameter, D: hole width/diameter (mm), l_d: insertion depth (mm),
-mu: friction coefficient. Angles in radians.
+The two-point geometry lives in `geometry.two_point` (placement needs it and geometry
+imports nothing from femcontact); the friction-dependent wedging bounds live here.
+d: peg width/diameter, D: hole width/diameter (mm), l_d: insertion depth (mm), mu: friction.
 """
-import math
+from geometry.two_point import clearance_ratio, l_2p, l_crit, tilt_crit, tilt_two_point
 
-from femcontact.errors import InputError
-
-
-def _check_widths(d: float, D: float) -> None:
-    if not 0 < d < D:
-        raise InputError(f"peg width d = {d}, hole width D = {D}: need 0 < d < D")
-
-
-def clearance_ratio(d: float, D: float) -> float:
-    """c = (D - d) / D."""
-    _check_widths(d, D)
-    return (D - d) / D
-
-
-def l_crit(d: float, D: float) -> float:
-    """Smallest insertion depth with two-point contact (mm)."""
-    _check_widths(d, D)
-    return math.sqrt(D * D - d * d)
+__all__ = ["clearance_ratio", "l_2p", "l_crit", "tilt_crit", "tilt_two_point", "l_max", "can_wedge"]
 
 
 def l_max(d: float, mu: float) -> float:
     """Largest insertion depth at which wedging can occur (mm)."""
     return d * mu
-
-
-def l_2p(d: float, l_d: float) -> float:
-    """Distance between the two contact points (mm)."""
-    return math.hypot(d, l_d)
-
-
-def tilt_two_point(d: float, D: float, l_d: float) -> float:
-    """Peg tilt theta in two-point contact at depth l_d (rad); needs l_d >= l_crit."""
-    if l_d < l_crit(d, D):
-        raise InputError(f"insertion_depth = {l_d}: below l_crit = {l_crit(d, D):.6g}, no two-point contact")
-    l2p = l_2p(d, l_d)
-    return math.acos(d / l2p) - math.acos(D / l2p)
-
-
-def tilt_crit(d: float, D: float) -> float:
-    """Tilt at l_d = l_crit, the largest two-point-contact tilt (rad)."""
-    _check_widths(d, D)
-    return math.acos(d / D)
-
-
-def tilt_max(d: float, D: float, mu: float) -> float:
-    """Tilt at l_d = l_max, the smallest tilt at which a peg can still wedge (rad)."""
-    return tilt_two_point(d, D, l_max(d, mu))
-
-
-def tilt_small_angle(d: float, D: float, l_d: float) -> float:
-    """Whitney's small-angle two-point tilt c*D/l (rad)."""
-    return clearance_ratio(d, D) * D / l_d
 
 
 def can_wedge(d: float, D: float, mu: float, l_d: float) -> bool:

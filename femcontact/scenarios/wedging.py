@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from femcontact import analytic
+from femcontact.references import peg_in_hole as analytic
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
 STABILIZATION_TOL = 1e-3  # stabilisation force after release / residual force

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from femcontact.rigid_body import RIGID_DOFS, rotation_numpy
+from femcontact.config.scene import RIGID_DOFS
+from femcontact.physics.rotation import rotation_numpy
 
 
 def pulse(t: float, frequency: float, duty: float, shape: str) -> float:
@@ -31,7 +32,6 @@ class Load:
     moment: np.ndarray   # N*mm (1 component in 2-D, 3 in 3-D)
     point: np.ndarray    # load point in the rigid body's shape frame (mm, about its reference point)
     motion: np.ndarray   # prescribed values of the rigid dofs (mm, rad); used for non-free dofs
-    weight: np.ndarray   # N, gravity on the rigid body (zero without 'gravity')
     rigid: object        # the RigidBody (pose maps)
 
     def generalized_force(self, r: np.ndarray) -> np.ndarray:
@@ -40,8 +40,8 @@ class Load:
         arm = rotation_numpy(self.rigid.split(r)[1]) @ self.rigid.Q0 @ self.point
         if dim == 2:
             moment = self.moment[0] + arm[0] * self.force[1] - arm[1] * self.force[0]
-            return np.r_[self.force + self.weight, moment]
-        return np.r_[self.force + self.weight, self.moment + np.cross(arm, self.force)]
+            return np.r_[self.force, moment]
+        return np.r_[self.force, self.moment + np.cross(arm, self.force)]
 
     def generalized_force_jacobian(self, r: np.ndarray, h: float = 1e-7) -> np.ndarray:
         """d(generalized_force)/dr by central differences (the map is smooth)."""
@@ -57,9 +57,9 @@ class Load:
 class Schedule:
     """Turns the scene's steps into `Load`s at any time inside a step."""
 
-    def __init__(self, scene: dict, rigid, points_local: dict, weight: np.ndarray):
+    def __init__(self, scene: dict, rigid, points_local: dict):
         self.steps = scene["steps"]
-        self.rigid, self.points, self.weight = rigid, points_local, weight
+        self.rigid, self.points = rigid, points_local
         dim = scene["dim"]
         self.names = RIGID_DOFS[dim]
         zero = {"force": np.zeros(dim), "moment": np.zeros(1 if dim == 2 else 3), "motion": np.zeros(len(self.names))}
@@ -92,4 +92,4 @@ class Schedule:
             raise InputError(f"steps[{index}].load_point = {step['load_point']!r}: unknown point, "
                              f"expected one of {', '.join(sorted(self.points))}")
         return Load(index, self.start_times[index] + t, dt, value["force"], value["moment"],
-                    self.points[step["load_point"]], value["motion"], self.weight, self.rigid)
+                    self.points[step["load_point"]], value["motion"], self.rigid)

@@ -11,18 +11,22 @@ S dr = -R_r + K_ru y, S = K_rr - K_ru X, gives dr. The Jacobian is consistent: K
 and K_ur come from UFL derivatives of the residual, the rigid rows from the contact
 vector C (N) tested with the rigid-body modes W(u, r) of the current configuration:
 
-    R_r = -(Q_ext(r) + W^T C) + M a(r)      (forces N, moments N*mm)
+    R_r = -(Q_ext(r) + W^T C) + R_effects(r)      (forces N, moments N*mm)
+
+where R_effects are the effects' own rigid-body terms (inertia M a(r), weight). The
+solver calls only the problem's forms and hooks; it names no effect.
 
 A backtracking line search on |R|^2 damps the semismooth Newton where stick/slip
 or contact sets change. A failed linear solve, a NaN or too many iterations raise
 `NewtonFailure`, which the stepper answers by cutting the increment.
 """
 import numpy as np
-import ufl
-from dolfinx import fem
+from dolfinx import la
 from dolfinx.fem import petsc
 from mpi4py import MPI
 from petsc4py import PETSc
+
+from femcontact.physics.rotation import cross_with_axis, rigid_modes
 
 DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
@@ -39,32 +43,16 @@ class SchurNewton:
     """Newton solver with the rigid-body unknowns condensed by a Schur complement."""
 
     def __init__(self, problem, prefix: str = "femcontact_"):
-        self.problem = problem
-        p, comm = problem, problem.mesh.comm
-        du = ufl.TrialFunction(p.V)
-        contact = p.contact_integrand * p.ds_contact
-        residual = sum(p.bulk) + contact
-        self.residual_bulk = fem.form(sum(p.bulk))
-        self.residual_contact = fem.form(contact)
-        self.jacobian = fem.form(ufl.derivative(residual, p.u, du))
-        self.jacobian_contact = fem.form(ufl.derivative(contact, p.u, du))
-        n_r = len(p.rigid.names)
-        d_contact_dr = ufl.diff(p.contact_integrand, p.rigid.variable)
-        self.contact_dr = [fem.form(d_contact_dr[j] * p.ds_contact) for j in range(n_r)]
-
-        self.K = petsc.create_matrix(self.jacobian)
-        self.Kc = petsc.create_matrix(self.jacobian_contact)
-        self.b_bulk = petsc.create_vector(self.residual_bulk)
-        self.b_contact = petsc.create_vector(self.residual_contact)
-        self.kur = [petsc.create_vector(form) for form in self.contact_dr]
+        self.problem = p = problem
+        forms, n_r = p.forms, len(p.rigid.names)
+        self.K = petsc.create_matrix(forms.jacobian)
+        self.Kc = petsc.create_matrix(forms.jacobian_contact)
+        self.b_bulk = petsc.create_vector(forms.residual_bulk)
+        self.b_contact = petsc.create_vector(forms.residual_contact)
+        self.kur = [petsc.create_vector(form) for form in forms.contact_dr]
         self.work = [p.u.vector.copy() for _ in range(2 * n_r + 3)]
-        if "anchor" in p.history:
-            v = ufl.TestFunction(p.V)
-            self.area_form = fem.form(sum(v[k] for k in range(p.dim)) * p.ds_contact)
-            self.area = petsc.create_vector(self.area_form)
-            self.b_anchor = petsc.create_vector(self.residual_contact)
 
-        self.ksp = PETSc.KSP().create(comm)
+        self.ksp = PETSc.KSP().create(p.mesh.comm)
         self.ksp.setOptionsPrefix(prefix)
         options = PETSc.Options()
         for key, value in {**DEFAULT_PETSC_OPTIONS, **p.scene["solver"]["petsc_options"]}.items():
@@ -72,36 +60,22 @@ class SchurNewton:
         self.ksp.setFromOptions()
         self.ksp.setOperators(self.K)
         if options.getString(prefix + "pc_type", "") == "gamg":
-            self.K.setNearNullSpace(self._rigid_body_modes())
+            self.K.setNearNullSpace(self._near_nullspace())
 
-        dim = p.dim
-        n_owned = p.V.dofmap.index_map.size_local
-        self.coordinates = p.V.tabulate_dof_coordinates()[:n_owned, :dim]
-        self.n_owned = n_owned
-        self.corner_contacts = 0
+        self.n_owned = p.V.dofmap.index_map.size_local
+        self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
         self.bc_dofs = p.support_dof_set
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
 
-    def _rigid_body_modes(self) -> PETSc.NullSpace:
+    def _near_nullspace(self) -> PETSc.NullSpace:
         """Near-nullspace of elasticity (translations and rotations) for algebraic multigrid."""
         p = self.problem
-        x = p.V.tabulate_dof_coordinates()[: p.V.dofmap.index_map.size_local, : p.dim]
-        modes = []
-        for k in range(p.dim):
-            mode = np.zeros_like(x)
-            mode[:, k] = 1.0
-            modes.append(mode)
-        for k in [2] if p.dim == 2 else [0, 1, 2]:
-            modes.append(_cross_axis(k, x))
         vectors = []
-        for mode in modes:
+        for mode in rigid_modes(self.coordinates):
             vector = p.u.vector.copy()
             vector.array_w[:] = mode.reshape(-1)
             vectors.append(vector)
-        for i, vector in enumerate(vectors):  # PETSc wants an orthonormal basis
-            for other in vectors[:i]:
-                vector.axpy(-vector.dot(other), other)
-            vector.normalize()
+        la.orthonormalize(vectors)
         return PETSc.NullSpace().create(vectors=vectors, comm=p.mesh.comm)
 
     # -- rigid-body modes of the current configuration ---------------------------------
@@ -113,16 +87,7 @@ class SchurNewton:
 
     def _modes(self) -> list[np.ndarray]:
         """Rigid-body test fields W (owned dofs): translations, then rotations e_k x (x - x_ref)."""
-        dim, arms = self.problem.dim, self._arms()
-        modes = []
-        for k in range(dim):
-            mode = np.zeros_like(arms)
-            mode[:, k] = 1.0
-            modes.append(mode)
-        axes = [2] if dim == 2 else [0, 1, 2]
-        for k in axes:
-            modes.append(_cross_axis(k, arms))
-        return [mode.reshape(-1) for mode in modes]
+        return [mode.reshape(-1) for mode in rigid_modes(self._arms())]
 
     def _allsum(self, value):
         return self.problem.mesh.comm.allreduce(value, op=MPI.SUM)
@@ -131,17 +96,17 @@ class SchurNewton:
     def assemble_residual(self, load):
         """Assemble R_u (Vec, support rows zeroed), R_r (numpy) and the force scale (N)."""
         p = self.problem
-        for b, form in ((self.b_bulk, self.residual_bulk), (self.b_contact, self.residual_contact)):
+        for b, form in ((self.b_bulk, p.forms.residual_bulk), (self.b_contact, p.forms.residual_contact)):
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
             if b is self.b_contact:
-                self.corner_contacts = p.corners.add_residual(b)
+                p.add_contact_residual(b)
             b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         contact = self.b_contact.array_r
         G = np.array([self._allsum(float(mode @ contact)) for mode in self._modes()])
         Q_ext = load.generalized_force(p.rigid.values)
-        R_r = -(Q_ext + G) + p.rigid_inertia_force(load) + self.stabilization @ (p.rigid.values - p.rigid.r_old.value)
+        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization @ (p.rigid.values - p.rigid.r_old.value)
         R_u = self.b_bulk.copy()
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
@@ -188,14 +153,14 @@ class SchurNewton:
         p = self.problem
         n_r, free = len(p.rigid.names), p.rigid.free
         self.K.zeroEntries()
-        petsc.assemble_matrix(self.K, self.jacobian, bcs=p.bcs)
+        petsc.assemble_matrix(self.K, p.forms.jacobian, bcs=p.bcs)
         self.Kc.zeroEntries()
-        petsc.assemble_matrix(self.Kc, self.jacobian_contact)
-        for b, form in zip(self.kur, self.contact_dr):
+        petsc.assemble_matrix(self.Kc, p.forms.jacobian_contact)
+        for b, form in zip(self.kur, p.forms.contact_dr):
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
-        p.corners.add_jacobian([self.K, self.Kc], self.kur, self.bc_dofs)
+        p.add_contact_jacobian([self.K, self.Kc], self.kur, self.bc_dofs)
         self.K.assemble()
         self.Kc.assemble()
         for b in self.kur:
@@ -211,19 +176,18 @@ class SchurNewton:
             w.array_w[:] = mode
             self.Kc.multTranspose(w, row)
             if j >= p.dim:
-                row.array_w[:] += _cross_with_axis(contact, axes[j - p.dim]).reshape(-1)
+                row.array_w[:] += cross_with_axis(contact, axes[j - p.dim]).reshape(-1)
             row.scale(-1.0)
             K_ru.append(row)
-        # dR_r/dr: -(W^T dC/dr + C^T dW/dr) - dQ_ext/dr + inertia
+        # dR_r/dr: -(W^T dC/dr + C^T dW/dr) - dQ_ext/dr + the effects' rigid stiffness
         total_contact = np.array([self._allsum(contact[:, k].sum()) for k in range(p.dim)])
         K_rr = np.zeros((n_r, n_r))
         for j, mode in enumerate(modes):
             for k in range(n_r):
                 K_rr[j, k] = -self._allsum(float(mode @ self.kur[k].array_r))
         for j in range(p.dim, n_r):  # d(e_a x (x - x_ref))/dt = -e_a x dt
-            K_rr[j, : p.dim] += _cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
-        K_rr += (-load.generalized_force_jacobian(p.rigid.values) + p.rigid_inertia_stiffness(load)
-                 + self.stabilization)
+            K_rr[j, : p.dim] += cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
+        K_rr += -load.generalized_force_jacobian(p.rigid.values) + p.rigid_stiffness(load) + self.stabilization
 
         y, du = self.work[2 * n_r], self.work[2 * n_r + 1]
         self._linear_solve(R_u, y)
@@ -262,29 +226,6 @@ class SchurNewton:
         cap = p.model.h_contact
         return dr * min(1.0, cap / length) if length > 0 else dr
 
-    def update_anchors(self) -> None:
-        """Move each contact node's stick anchor so that -gamma_T (xi - anchor) equals the
-        converged tangential traction: anchor = xi + R^T t / gamma_T. The traction per node
-        is its contact force (integral terms only) over its lumped contact area."""
-        p = self.problem
-        force = self.b_anchor
-        for vector, form in ((force, self.residual_contact), (self.area, self.area_form)):
-            with vector.localForm() as local:
-                local.set(0.0)
-            petsc.assemble_vector(vector, form)
-            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        from femcontact.rigid_body import rotation_numpy
-
-        with force.localForm() as f, self.area.localForm() as a:
-            traction = -f.array.reshape(-1, p.dim)
-            weight = a.array.reshape(-1, p.dim)[:, :1]
-        traction = np.where(weight > 0, traction / np.where(weight > 0, weight, 1.0), 0.0)
-        R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0
-        gamma_t = float(p.constants["gamma_t"].value * p.constants["E"].value) / p.model.h_contact
-        anchor = p.local_coordinates() + traction @ R / gamma_t
-        p.history["anchor"].x.array[:] = anchor.reshape(-1)
-
     def _linear_solve(self, rhs, out) -> None:
         self.ksp.solve(rhs, out)
         if self.ksp.getConvergedReason() < 0:
@@ -315,20 +256,3 @@ class SchurNewton:
         p.rigid.values[:] = r0 + alpha * dr
         p.rigid.sync()
 
-
-def _cross_axis(k: int, arms: np.ndarray) -> np.ndarray:
-    """e_k x arms for each row (2-D arms use k = 2, the out-of-plane axis)."""
-    if arms.shape[1] == 2:
-        return np.c_[-arms[:, 1], arms[:, 0]]
-    e = np.zeros(3)
-    e[k] = 1.0
-    return np.cross(e, arms)
-
-
-def _cross_with_axis(a: np.ndarray, k: int) -> np.ndarray:
-    """a x e_k for each row (2-D: k = 2), the gradient of C . (e_k x d) with respect to d."""
-    if a.shape[1] == 2:
-        return np.c_[a[:, 1], -a[:, 0]]
-    e = np.zeros(3)
-    e[k] = 1.0
-    return np.cross(a, e)

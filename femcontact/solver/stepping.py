@@ -1,11 +1,15 @@
-"""Run a contact scene: mesh, build the problem, step through the loads, report.
+"""Step a contact scene through its loads: increments, cuts, checkpoints.
 
-Increments that fail (Newton or linear solver) are halved and retried up to
-`solver.max_cuts` times; after a success the increment grows back. A run that
-still fails raises `SimulationFailed` naming the step, the time and the residual
-history; nothing half-done is reported as a result.
+An increment whose Newton iteration does not converge (`NewtonFailure`: too many
+iterations, a non-finite residual or a failed linear solve) is retried from the last
+converged state, first with the contact stabilisation's continuation, then halved, up
+to `solver.max_cuts` times; after a success it grows back. A run that still fails raises
+`SimulationFailed` naming the step, the time and the residual history. Any other
+exception is a fault, not non-convergence: it ends the run at once.
+Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
+(history file, progress).
 """
-import csv
+import json
 import time
 from pathlib import Path
 
@@ -13,7 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from femcontact.errors import InputError
-
+from femcontact.io import write_json_atomic
 
 STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
@@ -25,9 +29,9 @@ class SimulationFailed(RuntimeError):
     """The solver gave up on an increment after cutting it `max_cuts` times."""
 
 
-def load_points(model, rigid) -> dict:
+def load_points(model) -> dict:
     """Named points of the rigid body in its shape frame (about its reference point)."""
-    from femcontact.obstacle import reference_point
+    from femcontact.physics.signed_distance import reference_point
 
     Q0, origin = np.asarray(model.rigid["rotation"]), np.asarray(model.rigid["origin"])
     points = {name: Q0.T @ (np.asarray(x) - origin) - reference_point(model.rigid) for name, x in model.points.items()}
@@ -38,14 +42,14 @@ def load_points(model, rigid) -> dict:
 class Simulation:
     """A scene's problem, solver, schedule and the history of its increments."""
 
-    def __init__(self, scene: dict, comm=MPI.COMM_WORLD):
-        from femcontact.loading import Schedule
-        from femcontact.newton import SchurNewton
-        from femcontact.outputs import Recorder
-        from femcontact.problem import Problem
+    def __init__(self, scene: dict, comm=MPI.COMM_WORLD, listeners=()):
+        from femcontact.outputs.recorder import Recorder
+        from femcontact.solver.loading import Schedule
+        from femcontact.solver.newton import SchurNewton
+        from femcontact.solver.problem import Problem
         from geometry.model import build
 
-        self.scene, self.timings = scene, {}
+        self.scene, self.timings, self.listeners = scene, {}, list(listeners)
         start = time.perf_counter()
         self.model = build(scene, comm)
         self.timings["mesh"] = time.perf_counter() - start
@@ -54,14 +58,11 @@ class Simulation:
         self.newton = SchurNewton(self.problem)
         self.recorder = Recorder(self.problem, self.newton)
         self.timings["forms"] = time.perf_counter() - start
-        weight = np.zeros(scene["dim"])
-        if "gravity" in scene["effects"]:
-            weight[-1] = -self.problem.rigid.mass * scene["dynamics"]["gravity"]
-        self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model, self.problem.rigid), weight)
+        self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model))
         self.history: list[dict] = []
         size = self.problem.shape["scale"]
         self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
-                              for step in scene["steps"]] + [np.linalg.norm(weight), 1e-300])
+                              for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
         self.stabilized_increments = 0
         self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
@@ -80,38 +81,36 @@ class Simulation:
     # -- checkpoints: a study's shared prefix is computed once --------------------------------
     def save_checkpoint(self, directory: Path) -> None:
         """Write this rank's state after the steps run so far (restart needs the same ranks)."""
-        p, comm = self.problem, self.problem.mesh.comm
+        comm = self.problem.mesh.comm
         directory = Path(directory)
         if comm.rank == 0:
             directory.mkdir(parents=True, exist_ok=True)
         comm.barrier()
-        corners = p.corners
-        np.savez(directory / f"rank{comm.rank}.npz", r_old=p.rigid.r_old.value, tangential_old=corners.tangential_old,
-                 corner_old=corners.corner_old, corner_u_old=corners.u_old, **p.state())
+        np.savez(directory / f"rank{comm.rank}.npz", **self.problem.state())
         if comm.rank == 0:
-            from femcontact.run import write_json_atomic
-
             write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
                                                               "history": self.history})
 
     def load_checkpoint(self, directory: Path) -> int:
         """Restore a checkpoint; returns the number of steps it holds."""
-        import json
-
-        p, comm = self.problem, self.problem.mesh.comm
+        comm = self.problem.mesh.comm
         meta = json.loads((Path(directory) / "checkpoint.json").read_text())
         if meta["ranks"] != comm.size:
             raise InputError(f"--restart {directory}: written on {meta['ranks']} ranks, run on {comm.size}")
-        data = dict(np.load(Path(directory) / f"rank{comm.rank}.npz"))
-        p.restore(data)
-        p.rigid.r_old.value[:] = data["r_old"]
-        p.corners.tangential_old[:] = data["tangential_old"]
-        p.corners.corner_old, p.corners.u_old = data["corner_old"], data["corner_u_old"]
-        self.history = meta["history"]
+        self.problem.restore(dict(np.load(Path(directory) / f"rank{comm.rank}.npz")))
+        for row in meta["history"]:
+            self._record(row)
         return meta["steps"]
+
+    def _record(self, row: dict, cuts: int = 0) -> None:
+        self.history.append(row)
+        for listener in self.listeners:
+            listener(row, cuts)
 
     def run_step(self, index: int, step: dict) -> None:
         """Advance through one step with adaptive increments."""
+        from femcontact.solver.newton import NewtonFailure
+
         nominal = step["duration"] / step["increments"]
         t, dt, cuts = 0.0, nominal, 0
         max_cuts = self.scene["solver"]["max_cuts"]
@@ -119,40 +118,38 @@ class Simulation:
             dt = min(dt, step["duration"] - t)
             load = self.schedule.load(index, t + dt, dt)
             try:
-                self.history.append(self.increment(load))
-            except (RuntimeError, FloatingPointError) as error:
+                row = self.increment(load)
+            except NewtonFailure as error:
                 if cuts >= max_cuts:
                     raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
                                            f"after {cuts} cuts: {error}") from None
                 cuts += 1
                 dt /= 2
                 continue
+            self._record(row, cuts)
             t += dt
-            if cuts and self.history[-1]["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
+            if cuts and row["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
 
     def increment(self, load) -> dict:
-        """Solve one increment from the last converged state (restored on failure);
+        """Solve one increment from the last converged state (restored on any failure);
         returns its output row, computed before the history moves on."""
-        from femcontact.newton import NewtonFailure
+        from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
         state = p.state()
-        free = p.rigid.free
-        p.rigid.values[~free] = load.motion[~free]
-        p.rigid.sync()
-        p.set_time_step(load.dt)
+        p.begin_increment(load)
         start = time.perf_counter()
         try:
+            self._prescribe(load)
             self.stabilization_force = 0.0
             try:
                 iterations = self.newton.solve(load)
             except NewtonFailure:
                 p.restore(state)
-                p.rigid.values[~free] = load.motion[~free]
-                p.rigid.sync()
+                self._prescribe(load)
                 iterations = self.stabilized_solve(load)
-        except NewtonFailure:
+        except BaseException:
             p.restore(state)
             raise
         finally:
@@ -160,17 +157,20 @@ class Simulation:
         start = time.perf_counter()
         row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
         self.timings["output"] += time.perf_counter() - start
-        if "anchor" in p.history:
-            self.newton.update_anchors()
         p.commit(load.dt)
         return row
+
+    def _prescribe(self, load) -> None:
+        rigid = self.problem.rigid
+        rigid.values[~rigid.free] = load.motion[~rigid.free]
+        rigid.sync()
 
     def stabilized_solve(self, load) -> int:
         """Continuation in the contact stabilisation down to zero. If the exact equations
         (last factor) still fail, as for a body left in neutral equilibrium with vanishing
         contact forces, the solution of the smallest factor that converged is kept and its
         stabilisation force (N) is reported in the history."""
-        from femcontact.newton import NewtonFailure
+        from femcontact.solver.newton import NewtonFailure
 
         p, iterations, accepted = self.problem, 0, None
         self.stabilized_increments += 1
@@ -191,57 +191,6 @@ class Simulation:
             self.newton.stabilize(0.0)
         return iterations
 
-    def write_history(self, path: Path) -> None:
-        if self.problem.mesh.comm.rank != 0 or not self.history:
-            return
-        keys = list(self.history[0])
-        with open(path, "w", newline="") as stream:
-            writer = csv.DictWriter(stream, fieldnames=keys, extrasaction="ignore")
-            writer.writeheader()
-            writer.writerows(self.history)
-
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""
         return {row["step"]: row for row in self.history}
-
-
-def summary_metrics(simulation: Simulation) -> dict:
-    """Flat metrics: every step-end output as '<step>.<quantity>', plus totals."""
-    metrics = {}
-    for step, row in simulation.step_end_rows().items():
-        for key, value in row.items():
-            if key != "step":
-                metrics[f"{step}.{key}"] = value
-    metrics["newton_iterations"] = sum(row["newton_iterations"] for row in simulation.history)
-    metrics["increments"] = len(simulation.history)
-    metrics["max_von_mises"] = max(row["max_von_mises"] for row in simulation.history)
-    metrics["yielded"] = any(row["yielded"] for row in simulation.history)
-    return metrics
-
-
-def run_scene(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
-    """Run a resolved contact scene; write history.csv and fields.npz into case_dir.
-    `checkpoint`: also save the final state in case_dir/checkpoint; `restart`: start from
-    such a checkpoint (same first steps, same ranks) and run only the later steps."""
-    from femcontact.fields import write_fields
-
-    if not scene["steps"]:
-        raise InputError("steps: a contact scene needs at least one step")
-    simulation = Simulation(scene)
-    simulation.run(simulation.load_checkpoint(restart) if restart else 0)
-    case_dir = Path(case_dir)
-    if checkpoint:
-        simulation.save_checkpoint(case_dir / "checkpoint")
-    start = time.perf_counter()
-    simulation.write_history(case_dir / "history.csv")
-    write_fields(simulation, case_dir)
-    simulation.timings["output"] += time.perf_counter() - start
-    metrics = summary_metrics(simulation)
-    if scene["geometry"] == "peg_in_hole":
-        from femcontact.wedging import wedge_metrics
-
-        metrics.update(wedge_metrics(simulation))
-    info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
-            "effects": list(scene["effects"]), "built": simulation.problem.built,
-            "stabilized_increments": simulation.stabilized_increments}
-    return {"metrics": metrics, "timings": simulation.timings, "info": info}

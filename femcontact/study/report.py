@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.study import flatten, get_key, load_study
+from femcontact.study.runner import flatten, get_key, load_study
 
 
 def add_arguments(parser):
@@ -23,7 +23,7 @@ def add_arguments(parser):
 
 
 def command(args) -> int:
-    from femcontact.database import Database
+    from femcontact.study.database import Database
 
     study = load_study(args.study, args.set, args.results)
     study.results.mkdir(parents=True, exist_ok=True)
@@ -138,7 +138,7 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
             axes.axhline(1.0, color="k", linestyle=":", label="l_d = mu d")
     elif physical and points:
         xs = np.array([p[0] for p in points])
-        grid = np.linspace(0.0 if x == "clearance_ratio" else 0.0, xs.max() * 1.15, 200)[1:]
+        grid = np.linspace(0.0, xs.max() * 1.15, 200)[1:]
         if x == "clearance_ratio":
             axes.plot(grid, d * np.sqrt(1 / (1 - grid) ** 2 - 1), "k--", label="l_crit(c)")
             for mu in sorted({column(p[4], "contact.mu") for p in points}):
@@ -197,7 +197,7 @@ def _label(value) -> str:
 
 def write_snapshots(study, rows: dict) -> list[Path]:
     """Stress pictures of the ok cases the study selects; a case without fields.npz is skipped with a note."""
-    from femcontact import snapshot
+    from femcontact.outputs import snapshot
 
     settings, paths = study.snapshots, []
     for case in study.cases:

@@ -27,8 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.schema import Field, TableList, parse_assignment, set_key, validate
-from femcontact.scene import case_id, read_toml, resolve
+from femcontact.io import write_json_atomic
+from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+from femcontact.config.scene import case_id, read_toml, resolve
 
 _TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
 _TABLES = Field("any", [], "an array of tables",
@@ -313,7 +314,7 @@ def _die_with_parent(parent: int) -> None:
 def femcontact_command() -> list[str]:
     """The `femcontact` executable of this environment."""
     script = Path(sys.executable).parent / "femcontact"
-    return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact.cli"]
+    return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
 
 
 def remove_unfinished_compilations(cache_root: Path) -> None:
@@ -339,7 +340,7 @@ class Runner:
 
     def command(self, case: Case) -> list[str]:
         launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))
-        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", ".", "--quiet"]
+        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", "."]
         if case.prefix is not None:
             command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
         elif case.is_prefix:
@@ -351,7 +352,7 @@ class Runner:
         (case.dir / "result.json").unlink(missing_ok=True)
         (case.dir / "scene.toml").write_text(to_toml(case.scene))
         command = self.command(case)
-        _write_json(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
+        write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
                                                "slot": slot, "started": time.time()})
         env = {**os.environ, "XDG_CACHE_HOME": str(self.cache_root / f"slot-{slot}"), "PYTHONUNBUFFERED": "1"}
         env.setdefault("OMP_NUM_THREADS", "1")
@@ -379,9 +380,9 @@ class Runner:
                 reason = job.killed or _exit_reason(job.process.returncode, job.case.dir / "log.txt")
                 result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
                           "info": {"ranks": self.ranks}}
-                _write_json(job.case.dir / "result.json", result)
+                write_json_atomic(job.case.dir / "result.json", result)
             runner = json.loads((job.case.dir / "runner.json").read_text())
-            _write_json(job.case.dir / "runner.json", {**runner, "wall": elapsed})
+            write_json_atomic(job.case.dir / "runner.json", {**runner, "wall": elapsed})
             finished.append((job.case, result))
         return finished
 
@@ -418,8 +419,8 @@ class Runner:
                               f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
                     case.dir.mkdir(parents=True, exist_ok=True)
                     (case.dir / "scene.toml").write_text(to_toml(case.scene))
-                    _write_json(case.dir / "runner.json", self.provenance)
-                    _write_json(case.dir / "result.json", result)
+                    write_json_atomic(case.dir / "runner.json", self.provenance)
+                    write_json_atomic(case.dir / "result.json", result)
                     self._finish(case, result)
                     continue
                 self.start(case, free.pop(0))
@@ -449,12 +450,6 @@ def _exit_reason(code: int, log: Path) -> str:
     how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
     lines = [line for line in log.read_text(errors="replace").splitlines() if line.strip()] if log.exists() else []
     return f"{how} without a result" + (f"; last log line: {lines[-1].strip()[:300]}" if lines else "")
-
-
-def _write_json(path: Path, data) -> None:
-    from femcontact.run import write_json_atomic
-
-    write_json_atomic(path, data)
 
 
 # -- progress -------------------------------------------------------------------------------------
@@ -531,7 +526,7 @@ def add_arguments(parser):
 def command(args) -> int:
     import fcntl
 
-    from femcontact.database import Database
+    from femcontact.study.database import Database
 
     study = load_study(args.study, args.set, args.results)
     settings = study.settings
