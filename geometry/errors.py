@@ -1,5 +1,5 @@
-"""Errors of the geometry package."""
+"""The one error type a user can cause; femcontact re-exports it as femcontact.errors.InputError."""
 
 
-class GeometryError(ValueError):
-    """A geometry or mesh that cannot or should not be built; the message names the scene keys."""
+class InputError(ValueError):
+    """Bad user input (scene, study or command-line value); the message names the key and value."""

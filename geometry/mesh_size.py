@@ -10,7 +10,7 @@ g = GRADING / resolution per mm of distance d from them, up to h_max):
 c h^n being the area or volume of an equilateral element of edge h, with the measure of
 the body within d of the fine set from a tube formula (fine curves of total length L in
 2-D: L d; 3-D balls of radius z around the two contact points, a top strip or disc for a
-block), capped by the body's measure. It raises GeometryError naming the keys when N
+block), capped by the body's measure. It raises InputError naming the keys when N
 exceeds MAX_ELEMENTS, or when the contact size exceeds the fine zone's half-length (a
 zone holding less than one element). Measured against gmsh for the example scenes: the
 estimate is 0.8-2.3x the actual count (tests/test_bad_input.py checks 0.5-3x).
@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from geometry import gmsh_tools
-from geometry.errors import GeometryError
+from geometry.errors import InputError
 
 MAX_ELEMENTS = 2_000_000
 """Ceiling on the estimated elements of one mesh (about 2 GB for gmsh and DOLFINx in 3-D)."""
@@ -100,24 +100,20 @@ def _integrate(scene: dict, sz) -> float:
     return float(np.sum(np.diff(covered) / (c * h_mid ** dim)) + max(measure - covered[-1], 0.0) / (c * h_end ** dim))
 
 
-def check(scene: dict, sz=None) -> float:
-    """Refuse sizes that make the mesh too large or too coarse (GeometryError naming the keys);
-    returns the estimated number of elements. `sz`: the builder's sizes (computed if None)."""
-    if sz is None:
-        from geometry.model import builder
-
-        sz = builder(scene).sizes(scene)
+def check(scene: dict, sz) -> float:
+    """Refuse the builder's sizes `sz` when they make the mesh too large or too coarse
+    (InputError naming the keys); returns the estimated number of elements."""
     mesh = scene["mesh"]
     settings = (f"mesh.resolution = {mesh['resolution']:g}, contact size {sz.h_contact:.3g} mm, "
                 f"max size {sz.h_max:.3g} mm, fine-zone half-length {sz.zone:.3g} mm")
     if sz.h_contact > sz.zone:
-        raise GeometryError(f"mesh too coarse: the contact size exceeds the fine zone ({settings}); raise "
+        raise InputError(f"mesh too coarse: the contact size exceeds the fine zone ({settings}); raise "
                             "mesh.resolution, lower mesh.contact_size or raise mesh.contact_zone")
     elements = estimate(scene, sz)
     if elements > MAX_ELEMENTS:
         keys = size_keys(scene)
         sizes = ", ".join(f"{key} = {_get(scene, key):g}" for key in keys)
-        raise GeometryError(f"mesh too large: about {elements:.2g} elements, more than {MAX_ELEMENTS:.0e} "
+        raise InputError(f"mesh too large: about {elements:.2g} elements, more than {MAX_ELEMENTS:.0e} "
                             f"({settings}; {sizes}); lower mesh.resolution, raise mesh.contact_size or "
                             f"mesh.size_max, or shrink {' / '.join(keys)}")
     return elements

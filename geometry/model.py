@@ -86,6 +86,14 @@ def points(scene: dict) -> dict:
     return dict(peg_pose(scene).points)
 
 
+def check_mesh(scene: dict) -> float:
+    """Refuse a scene whose mesh would be too large or too coarse (geometry.mesh_size), before
+    gmsh runs; returns the estimated number of elements."""
+    from geometry import mesh_size
+
+    return mesh_size.check(scene, builder(scene).sizes(scene))
+
+
 def build(scene: dict, comm, msh_path=None) -> Model:
     """Mesh the deformable body of a resolved scene on rank 0 of `comm` and distribute it.
     `msh_path`: also write the gmsh mesh there (.msh)."""

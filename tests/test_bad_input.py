@@ -421,17 +421,17 @@ def test_wedge_angles_are_null_with_a_reason_when_contact_is_lost():
     are undefined, reported as None (JSON null) with the reason, and the peg is not wedged."""
     from types import SimpleNamespace
 
-    from femcontact.scene import load_scene
-    from femcontact.wedging import wedge_metrics
+    from femcontact.config.scene import load_scene
+    from femcontact.scenarios.wedging import wedge_metrics
 
     scene = load_scene(WEDGING)
     row = {"step": "release", "tilt_deg": 1.25, "applied_Fx": 0.0, "applied_Fy": 0.0, "stabilization_force": 0.0,
            "elastic_energy": 1e-3, "max_von_mises": 10.0, "contact_A_x": -20.0, "contact_A_y": -0.1,
-           "contact_B_x": np.nan, "contact_B_y": np.nan}
+           "contact_B_x": None, "contact_B_y": None}
     for zone, sign in (("A", 1.0), ("B", -1.0)):
         row.update({f"reaction_support_{zone}_x": 3.0 * sign, f"reaction_support_{zone}_y": 0.1 * sign})
     loaded = {**row, "step": "load", "applied_Fx": -5.0, "applied_Fy": 1.0}
-    problem = SimpleNamespace(model=SimpleNamespace(rigid={"tilt": 0.02}),
+    problem = SimpleNamespace(model=SimpleNamespace(rigid={"tilt": 0.02}), deformable="hole",
                               support_dofs={"support_A": None, "support_B": None})
     metrics = wedge_metrics(SimpleNamespace(scene=scene, history=[loaded, row], problem=problem,
                                             timings={"solve": 1.0}))
@@ -445,7 +445,7 @@ def test_mesh_guard_survives_overflowing_sizes(tmp_path, capsys):
     scene = str(SCENES / "wedging_3d.toml")
     assert_refused(*cli(capsys, "run", scene, *sets("hole.block_width=1e300"), "--out", tmp_path / "o"),
                    "mesh too large", "hole.block_width = 1e+300")
-    from femcontact.scene import load_scene
+    from femcontact.config.scene import load_scene
 
     for overrides in (["mesh.size_max=1e300"], ["mesh.contact_zone=1e300", "mesh.resolution=0.5"]):
         load_scene(WEDGING, overrides)  # a coarse or an all-fine mesh of a 2-D body: allowed
@@ -455,7 +455,7 @@ def test_mesh_size_estimate_is_within_a_factor_of_three_of_gmsh():
     """The guard's element estimate against the count gmsh produces (2-D scenes, < 1 s each)."""
     import gmsh
 
-    from femcontact.scene import load_scene
+    from femcontact.config.scene import load_scene
     from geometry import gmsh_tools, mesh_size
     from geometry.model import builder
 
