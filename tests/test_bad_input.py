@@ -373,6 +373,21 @@ def test_run_on_a_full_disk_leaves_no_partial_file(tmp_path, capsys):
         assert not any((disk / "case").iterdir())
 
 
+def test_streamed_history_on_a_full_disk_keeps_whole_rows(tmp_path):
+    from femcontact.io import WriteError
+    from femcontact.outputs.history import HistoryWriter
+
+    with tmpfs(tmp_path / "disk", "8k") as disk:
+        history = HistoryWriter(disk / "history.csv")
+        rows = [{"step": "load", "time": 0.1 * i, "force": np.pi * i} for i in range(1000)]  # ~40 kB
+        for row in rows:
+            history(row)
+        history.close()
+        assert isinstance(history.error, WriteError) and "No space left on device" in str(history.error)
+        lines = (disk / "history.csv").read_text().splitlines(keepends=True)
+        assert 10 < len(lines) < 1000 and all(line.endswith("\n") and line.count(",") == 2 for line in lines)
+
+
 def test_write_atomic_keeps_the_old_file_and_no_temporary(tmp_path):
     from femcontact.io import WriteError, write_json_atomic, write_npz_atomic
 
