@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(basename $(notdir $(STUDY_FILES)))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi study bench clean $(STUDIES)
+.PHONY: setup test test-serial test-mpi study bench stability clean $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -70,6 +70,10 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+
+# Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
+stability: setup
+	$(PY) -m femcontact.scenarios.stability $(STABILITY_FLAGS)
 
 clean:
 	rm -rf results
