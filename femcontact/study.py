@@ -316,13 +316,25 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact.cli"]
 
 
-def remove_unfinished_compilations(cache_root: Path) -> None:
+def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
     """Delete JIT sources whose compiled module is missing: a case killed while compiling
     leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
-    here: the runner holds the study lock and its job slots' caches are its own."""
-    for source in cache_root.glob("slot-*/fenics/*.c"):
+    here: the runner holds the study lock and its job slots' caches are its own (a SLURM
+    task cleans only the slot it holds)."""
+    for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+
+
+def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
+    """The command that runs `case` in its directory: LAUNCHER FEMCONTACT run scene.toml ..."""
+    command = shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + [
+        "run", "scene.toml", "--out", ".", "--quiet"]
+    if case.prefix is not None:
+        command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+    elif case.is_prefix:
+        command += ["--checkpoint"]
+    return command
 
 
 class Runner:
@@ -338,13 +350,7 @@ class Runner:
         remove_unfinished_compilations(self.cache_root)
 
     def command(self, case: Case) -> list[str]:
-        launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))
-        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", ".", "--quiet"]
-        if case.prefix is not None:
-            command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
-        elif case.is_prefix:
-            command += ["--checkpoint"]
-        return command
+        return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
         case.dir.mkdir(parents=True, exist_ok=True)
@@ -526,6 +532,20 @@ def add_arguments(parser):
     parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary")
     parser.add_argument("--results", default="results", help="results root (default: results)")
     parser.add_argument("--list", action="store_true", help="list the cases and their state, run nothing")
+    parser.add_argument("--status", action="store_true",
+                        help="a line per case (ok, failed, running, queued, missing) and the counts; "
+                             "rebuilds the database and CSV; runs nothing")
+    parser.add_argument("--launcher", default=None,
+                        help="command prefix starting an MPI job of {ranks} ranks (default: the study's "
+                             "launcher; with --scheduler slurm: 'srun -n {ranks}')")
+    slurm = parser.add_argument_group("SLURM (docs/slurm.md)")
+    slurm.add_argument("--scheduler", choices=("local", "slurm"), default="local",
+                       help="slurm: submit the cases not done as a job array and return")
+    slurm.add_argument("--partition", default="", help="SLURM partition (default: the cluster's)")
+    slurm.add_argument("--time", default=None, metavar="HH:MM:SS",
+                       help="time limit per array task (default: the study's time_limit + 5 min)")
+    slurm.add_argument("--max-concurrent", type=int, default=None, metavar="K",
+                       help="array tasks running at once (default: the study's jobs; 0 = no limit)")
 
 
 def command(args) -> int:
@@ -539,6 +559,11 @@ def command(args) -> int:
     jobs = args.jobs if args.jobs is not None else settings["jobs"]
     if jobs < 0 or ranks < 1:
         raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
+    if args.launcher is not None:
+        settings["launcher"] = args.launcher
+    if args.status:
+        return _status(study)
+    max_concurrent = args.max_concurrent if args.max_concurrent is not None else jobs  # SLURM: 0 = no limit
     jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
     study.results.mkdir(parents=True, exist_ok=True)
     lock = open(study.results / ".lock", "w")
@@ -551,6 +576,11 @@ def command(args) -> int:
     database.rebuild(study.cases)  # the case directories are the truth
     if args.list:
         return _list(study)
+    if args.scheduler == "slurm":
+        return _submit(study, args, ranks, max_concurrent)
+    from femcontact.slurm import refuse_if_in_slurm
+
+    refuse_if_in_slurm(study)
     todo = [case for case in study.cases if _needs_run(case, args)]
     prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
                      and (args.force or (read_result(case.prefix.dir) or {}).get("status") != "ok")}.values())
@@ -575,6 +605,30 @@ def command(args) -> int:
     progress.close()
     database.export_csv(study.results / "results.csv")
     return _summary(study, progress.start)
+
+
+def _status(study: Study) -> int:
+    from femcontact import slurm
+    from femcontact.database import Database
+
+    study.results.mkdir(parents=True, exist_ok=True)
+    database = Database(study.database, study.keys)
+    database.rebuild(study.cases)
+    database.export_csv(study.results / "results.csv")
+    slurm.status(study)
+    return 0
+
+
+def _submit(study: Study, args, ranks: int, max_concurrent: int) -> int:
+    from femcontact import slurm
+
+    if max_concurrent < 0:
+        raise InputError(f"--max-concurrent {max_concurrent}: expected >= 0")
+    return slurm.submit(study, ranks=ranks, launcher=args.launcher or slurm.DEFAULT_LAUNCHER,
+                        time_limit=slurm.parse_time(args.time) if args.time is not None
+                        else slurm.default_time(study.settings["time_limit"]),
+                        partition=args.partition, max_concurrent=max_concurrent,
+                        retry_failed=args.retry_failed, force=args.force, quiet=args.quiet)
 
 
 def _needs_run(case: Case, args) -> bool:
