@@ -223,7 +223,7 @@ def _submit_array(study: Study, kind: str, cases: list[Case], stamp: str, *, ran
 
 # -- status ---------------------------------------------------------------------------------------
 
-def status(study: Study, stream=sys.stdout) -> dict:
+def status(study: Study, stream=None) -> dict:
     """Print a line per case (id, state, parameters, SLURM task) and the counts; returns the counts.
 
     States: ok, failed (a result), running / queued (a SLURM task of a recorded submission), missing."""
@@ -232,6 +232,7 @@ def status(study: Study, stream=sys.stdout) -> dict:
     except InputError as error:
         print(f"note: {error}; SLURM states unknown", file=sys.stderr)
         active = {}
+    stream = stream or sys.stdout
     counts = dict.fromkeys(("ok", "failed", "running", "queued", "missing"), 0)
     for case in study.cases:
         result = read_result(case.dir)
