@@ -3,7 +3,8 @@
 # generated config and munge key, everything (state, spool, logs, sockets) in DIR.
 #   cluster.sh start DIR   start it; prints nothing on success, writes DIR/env (export SLURM_CONF=...)
 #   cluster.sh stop DIR    stop the daemons started by `start DIR` (by their pid files)
-# Runs as root (slurmd must, to start jobs); no cgroups: proctrack/linuxproc, task/none.
+# Runs as root (slurmd must, to start jobs; jobs may come from any user); no cgroups:
+# proctrack/linuxproc, task/none. The node has 2 CPUs whatever the machine has (config_overrides).
 set -euo pipefail
 action=${1:?usage: cluster.sh start|stop DIR}
 dir=$(realpath -m "${2:?usage: cluster.sh start|stop DIR}")
@@ -11,6 +12,15 @@ dir=$(realpath -m "${2:?usage: cluster.sh start|stop DIR}")
 free_port() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 
 stop() {
+  # jobs first: their slurmstepd processes would outlive slurmd
+  if [ -f "$dir/slurmctld.pid" ] && kill -0 "$(cat "$dir/slurmctld.pid")" 2>/dev/null; then
+    export SLURM_CONF="$dir/slurm.conf"
+    jobs=$(squeue -h -o %A 2>/dev/null | sort -u)
+    if [ -n "$jobs" ]; then
+      scancel $jobs || true
+      for _ in $(seq 100); do [ -z "$(squeue -h -o %A 2>/dev/null)" ] && break; sleep 0.2; done
+    fi
+  fi
   for daemon in slurmd slurmctld munged; do
     pidfile="$dir/$daemon.pid"
     [ -f "$pidfile" ] || continue
@@ -26,7 +36,7 @@ stop() {
 
 start() {
   mkdir -p "$dir"/{state,spool,munge}
-  chmod 700 "$dir/munge"
+  chmod 755 "$dir" "$dir/munge"  # clients of other users reach the munge socket
   # munge: a fresh key, its socket in DIR (clients and slurm find it through AuthInfo)
   dd if=/dev/urandom of="$dir/munge/munge.key" bs=1024 count=1 status=none
   chmod 400 "$dir/munge/munge.key"
