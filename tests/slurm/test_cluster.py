@@ -129,6 +129,21 @@ def test_rcc_study_through_slurm_equals_the_local_run(tmp_path, capsys):
     assert "6 of 6 cases have results" in capsys.readouterr().out
     assert submit(path, tmp_path / "slurm", capsys) == []  # all done: nothing submitted
 
+    # the runner itself in an allocation (docs/slurm.md, "Inside an allocation"): cases as srun steps
+    script = tmp_path / "runner.sh"
+    script.write_text(f"#!/bin/bash\n#SBATCH --ntasks=2 --time=00:10:00 --output={tmp_path}/runner.out\n"
+                      f"{sys.executable} -m femcontact.cli study {path} --results {tmp_path / 'alloc'} --jobs 2 "
+                      "--launcher 'srun --exclusive -n {ranks}' --quiet\n")
+    runner = subprocess.run(["sbatch", "--parsable", "--wait", str(script)], capture_output=True, text=True,
+                            timeout=300)
+    assert runner.returncode == 0, (tmp_path / "runner.out").read_text()
+    alloc_columns, alloc_rows = read_csv(tmp_path / "alloc/rcc_slurm/results.csv")
+    assert alloc_columns == local_columns and len(alloc_rows) == 6
+    for local, inside in zip(local_rows, alloc_rows):
+        assert {c: inside[c] for c in compared} == {c: local[c] for c in compared}
+    for case in load_study(path, results_root=tmp_path / "alloc").cases:
+        assert json.loads((case.dir / "runner.json").read_text())["command"][:4] == ["srun", "--exclusive", "-n", "1"]
+
 
 def test_cancelled_task_is_resubmitted_alone_and_nothing_is_redone(tmp_path, monkeypatch, capsys):
     (tmp_path / "base.toml").write_text(FAKE_BASE)
