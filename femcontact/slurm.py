@@ -237,8 +237,8 @@ def status(study: Study, stream=None) -> dict:
     for case in study.cases:
         result = read_result(case.dir)
         task = active.get(case.id)
-        if result is not None and not (task and task["state"] == "RUNNING"):
-            state = result["status"] if result["status"] == "ok" else "failed"
+        if result is not None:
+            state = "ok" if result["status"] == "ok" else "failed"
         elif task:
             state = "running" if task["state"] in ("RUNNING", "COMPLETING", "CONFIGURING") else "queued"
         else:
