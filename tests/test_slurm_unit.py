@@ -4,7 +4,7 @@ crashes, is cancelled or its shared prefix failed.
 
 `sbatch` and `squeue` are stand-ins on PATH: sbatch keeps the script and answers job ids 100, 101, ...;
 squeue prints the lines of $FAKE_SQUEUE ("JOB|INDICES|STATE"). The array tasks are run directly
-(`python -m femcontact.slurm task MANIFEST INDEX`) with tests/fake_case.py as the case. The real
+(`python -m femcontact.study.slurm task MANIFEST INDEX`) with tests/fake_case.py as the case. The real
 cluster test is tests/slurm/ (`make test-slurm`).
 """
 import json
@@ -19,9 +19,9 @@ import pytest
 
 from femcontact.cli import main
 from femcontact.errors import InputError
-from femcontact.slurm import (active_tasks, default_time, expand_indices, parse_time, read_submissions,
+from femcontact.study.slurm import (active_tasks, default_time, expand_indices, parse_time, read_submissions,
                               sbatch_script, select)
-from femcontact.study import load_study
+from femcontact.study.runner import load_study
 
 HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
@@ -62,7 +62,7 @@ def submit(path, *options) -> int:
 
 
 def run_task(manifest, index, **env) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "femcontact.slurm", "task", str(manifest), str(index)],
+    return subprocess.run([sys.executable, "-m", "femcontact.study.slurm", "task", str(manifest), str(index)],
                           env={**os.environ, **env}, capture_output=True, text=True, timeout=60)
 
 
@@ -77,7 +77,7 @@ def test_sbatch_script_has_the_array_resources_and_task_command(tmp_path):
     assert directives == ["--job-name=femcontact-demo", "--array=0-4%2", "--ntasks=3", "--cpus-per-task=1",
                           "--time=01:30:00", f"--output={tmp_path}/%A_%a.out", "--partition=short",
                           "--dependency=afterany:41"]
-    assert text.splitlines()[-1] == (f"exec /venv/bin/python -m femcontact.slurm task {tmp_path / 'm.json'} "
+    assert text.splitlines()[-1] == (f"exec /venv/bin/python -m femcontact.study.slurm task {tmp_path / 'm.json'} "
                                      '"$SLURM_ARRAY_TASK_ID"')
     assert subprocess.run(["bash", "-n"], input=text, text=True).returncode == 0
     plain = sbatch_script(name="demo", kind="prefix", count=1, ranks=1, manifest=tmp_path / "m.json",
@@ -172,7 +172,7 @@ def test_task_records_a_crash_but_not_a_cancellation(tmp_path, cluster):
 
     calls = tmp_path / "calls"
     calls.mkdir()
-    task = subprocess.Popen([sys.executable, "-m", "femcontact.slurm", "task", str(manifest), "1"],
+    task = subprocess.Popen([sys.executable, "-m", "femcontact.study.slurm", "task", str(manifest), "1"],
                             env={**os.environ, "FAKE_HANG_MU": "0.2", "FAKE_CALLS": str(calls)},
                             stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 30

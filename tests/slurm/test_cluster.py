@@ -19,8 +19,8 @@ from pathlib import Path
 import pytest
 
 from femcontact.cli import main
-from femcontact.slurm import active_tasks, read_submissions
-from femcontact.study import load_study
+from femcontact.study.slurm import active_tasks, read_submissions
+from femcontact.study.runner import load_study
 
 REPO = Path(__file__).resolve().parents[2]
 FAKE_CASE = REPO / "tests" / "fake_case.py"
