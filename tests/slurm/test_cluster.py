@@ -132,7 +132,7 @@ def test_rcc_study_through_slurm_equals_the_local_run(tmp_path, capsys):
     # the runner itself in an allocation (docs/slurm.md, "Inside an allocation"): cases as srun steps
     script = tmp_path / "runner.sh"
     script.write_text(f"#!/bin/bash\n#SBATCH --ntasks=2 --time=00:10:00 --output={tmp_path}/runner.out\n"
-                      f"{sys.executable} -m femcontact.cli study {path} --results {tmp_path / 'alloc'} --jobs 2 "
+                      f"{sys.executable} -m femcontact study {path} --results {tmp_path / 'alloc'} --jobs 2 "
                       "--launcher 'srun --exclusive -n {ranks}' --quiet\n")
     runner = subprocess.run(["sbatch", "--parsable", "--wait", str(script)], capture_output=True, text=True,
                             timeout=300)
