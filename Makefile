@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(basename $(notdir $(STUDY_FILES)))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench stability clean $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -93,6 +93,10 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+
+# What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
+accuracy: setup
+	$(PY) -m femcontact.scenarios.accuracy --with-3d
 
 # Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
 stability: setup
