@@ -17,11 +17,14 @@ from scipy.optimize import brentq, minimize_scalar, root
 
 from femcontact.errors import InputError
 
-# Contact candidates: (kind, side); side -1 = left (x < 0), +1 = right.
-CANDIDATES = (("corner", -1), ("corner", 1), ("edge", -1), ("edge", 1))
-# Active sets that can close together: a tip corner with the opposite edge (two-point contact)
-# or with the edge on its own side (the peg lying flat along one wall, theta = 0: "line").
-ACTIVE_SETS = ((), (0,), (1,), (2,), (3,), (0, 3), (1, 2), (0, 2), (1, 3))
+# Contact candidates (kind, side), side -1 = left (x < 0), +1 = right: a tip corner on the
+# chamfer or on the straight wall, or the hole edge E on the peg side.
+CANDIDATES = (("chamfer", -1), ("chamfer", 1), ("wall", -1), ("wall", 1), ("edge", -1), ("edge", 1))
+# Active sets that can close together: a tip corner on one wall with the edge on the opposite peg
+# side (two-point contact), with the edge on its own side (the peg flat along a wall: "line"), or
+# the corner on the chamfer with the edge on its own side: the corner sits on the edge while the
+# contact force turns from the chamfer's direction to the side's (end of the chamfer crossing).
+ACTIVE_SETS = ((), (0,), (1,), (2,), (3,), (4,), (5,), (2, 5), (3, 4), (2, 4), (3, 5), (0, 4), (1, 5))
 
 
 @dataclass(frozen=True)
@@ -121,25 +124,28 @@ def pose(p: Insertion, s: float, u: float, theta: float) -> tuple[tuple, tuple]:
 
 def contact(p: Insertion, k: int, tip, theta: float):
     """Candidate k at the peg pose: (gap mm, contact point, force on the peg per unit normal
-    force, normal on the peg, reachable). Gap < 0 is penetration."""
+    force, normal on the peg, reachable). Gap < 0 is penetration; the gap is that of the full
+    line (chamfer line, wall line, peg side line), `reachable` says whether the contact lies on
+    its segment (corner at z >= 0 on the chamfer, z <= 0 on the wall, edge above the tip)."""
     kind, side = CANDIDATES[k]
     a, n = axes(theta)
     half = 0.5 * p.hole_diameter
-    if kind == "corner":
-        point = (tip[0] + side * p.r * n[0], tip[1] + side * p.r * n[1])
-        if point[1] < 0:  # straight wall x = side D/2
-            normal, tangent = (-side, 0.0), (0.0, 1.0)
-            gap = half - side * point[0]
-        else:  # chamfer line through the edge, extended above its top (check() keeps the tip inside)
-            ca, sa = math.cos(p.chamfer_angle), math.sin(p.chamfer_angle)
-            normal, tangent = (-side * ca, sa), (side * sa, ca)
-            gap = (half + point[1] * math.tan(p.chamfer_angle) - side * point[0]) * ca
-        return gap, point, (normal[0] + p.mu * tangent[0], normal[1] + p.mu * tangent[1]), normal, True
-    point = (side * half, 0.0)
-    arm = (point[0] - tip[0], point[1] - tip[1])
-    normal = (-side * n[0], -side * n[1])
-    force = (normal[0] + p.mu * a[0], normal[1] + p.mu * a[1])
-    return side * dot(arm, n) - p.r, point, force, normal, dot(arm, a) >= 0
+    if kind == "edge":
+        point = (side * half, 0.0)
+        arm = (point[0] - tip[0], point[1] - tip[1])
+        normal = (-side * n[0], -side * n[1])
+        force = (normal[0] + p.mu * a[0], normal[1] + p.mu * a[1])
+        return side * dot(arm, n) - p.r, point, force, normal, dot(arm, a) >= 0
+    point = (tip[0] + side * p.r * n[0], tip[1] + side * p.r * n[1])
+    if kind == "wall":  # x = side D/2 below the edge
+        normal, tangent = (-side, 0.0), (0.0, 1.0)
+        gap, reachable = half - side * point[0], point[1] <= 0
+    else:  # chamfer line through the edge (check() keeps the corner below its top at first contact)
+        ca, sa = math.cos(p.chamfer_angle), math.sin(p.chamfer_angle)
+        normal, tangent = (-side * ca, sa), (side * sa, ca)
+        gap = (half + point[1] * math.tan(p.chamfer_angle) - side * point[0]) * ca
+        reachable = point[1] >= 0
+    return gap, point, (normal[0] + p.mu * tangent[0], normal[1] + p.mu * tangent[1]), normal, reachable
 
 
 @dataclass
@@ -187,10 +193,12 @@ def _state(p: Insertion, s: float, active: tuple, u: float, theta: float, forces
         Fz += force * f[1]
         if CANDIDATES[k][0] == "edge":
             l = dot((point[0] - tip[0], point[1] - tip[1]), axes(theta)[0])
-        kinds.append("chamfer" if CANDIDATES[k][0] == "corner" and point[1] >= 0 else CANDIDATES[k][0])
+        kinds.append(CANDIDATES[k][0])
     Fx = -p.kx * u
     M = -p.ktheta * (theta - p.angular_error) + cross((centre[0] - tip[0], centre[1] - tip[1]), (Fx, -Fz))
-    if len(active) == 2:
+    if len(active) == 2 and "chamfer" in kinds:
+        phase = "chamfer"
+    elif len(active) == 2:
         phase = "two_point" if CANDIDATES[active[0]][1] != CANDIDATES[active[1]][1] else "line"
     else:
         phase = {0: "none", 1: "chamfer" if kinds == ["chamfer"] else "one_point"}[len(active)]
@@ -211,34 +219,43 @@ def solve_set(p: Insertion, s: float, active: tuple, guess=None):
 
 
 def feasible(p: Insertion, s: float, active: tuple, u: float, theta: float, forces) -> bool:
-    """Normal forces >= 0, active edges on the peg side, no other candidate penetrating."""
-    tol_force = 1e-9 * _reference_stiffness(p) * p.clearance
-    if any(force < -tol_force for force in forces):
+    """Normal forces >= 0, active contacts on their segments, no other candidate penetrating."""
+    if forces and min(forces) < -1e-9 * max(abs(force) for force in forces):
         return False
     _, tip = pose(p, s, u, theta)
     for k in range(len(CANDIDATES)):
         gap, _, _, _, reachable = contact(p, k, tip, theta)
-        if k in active and not reachable:
+        if k in active and not reachable and abs(gap_position(p, k, tip, theta)) > 1e-9 * p.peg_diameter:
             return False
         if k not in active and reachable and gap < -1e-9 * p.clearance:
             return False
     return True
 
 
-def solve_depth(p: Insertion, s: float, previous: dict | None = None) -> State | None:
-    """Equilibrium at depth s with the fewest closed contacts (None: no sliding equilibrium,
-    the peg jams). `previous` maps active sets to earlier solutions, used as starting guesses."""
+def gap_position(p: Insertion, k: int, tip, theta: float) -> float:
+    """How far (mm) candidate k's contact lies beyond the end of its segment (the corner's height
+    for chamfer and wall contacts, the edge's distance along the peg from the tip); the sign is
+    irrelevant, only |value| <= round-off admits a contact at the very end."""
+    _, point, _, _, _ = contact(p, k, tip, theta)
+    if CANDIDATES[k][0] == "edge":
+        return dot((point[0] - tip[0], point[1] - tip[1]), axes(theta)[0])
+    return point[1]
+
+
+def solve_depth(p: Insertion, s: float, previous: dict | None = None, current: tuple | None = None) -> State | None:
+    """Equilibrium at depth s: the current active set while it stays feasible (the path the
+    insertion follows where branches overlap, e.g. at the chamfer's end), else the feasible set
+    with the fewest closed contacts (None: no sliding equilibrium, the peg jams). `previous`
+    maps active sets to earlier solutions, used as starting guesses and updated."""
     previous = {} if previous is None else previous
-    found = []
-    for active in ACTIVE_SETS:
-        if found and len(active) > len(found[0].active):
-            break
+    order = ([current] if current is not None else []) + [a for a in ACTIVE_SETS if a != current]
+    for active in order:
         solution = solve_set(p, s, active, previous.get(active))
         if solution is not None and feasible(p, s, active, *solution):
             u, theta, forces = solution
             previous[active] = np.r_[u, theta * p.peg_diameter, np.array(forces) / _reference_stiffness(p)]
-            found.append(_state(p, s, active, *solution))
-    return found[0] if found else None
+            return _state(p, s, active, *solution)
+    return None
 
 
 def start_depth(p: Insertion) -> float:
@@ -271,7 +288,7 @@ def insertion(p: Insertion, depth_max: float, points: int = 201) -> dict:
         raise InputError(f"--points = {points}: need at least 3")
     guesses, states = {}, []
     for s in np.linspace(start_depth(p), depth_max, points):
-        state = solve_depth(p, float(s), guesses)
+        state = solve_depth(p, float(s), guesses, states[-1].active if states else None)
         if state is None:
             break
         states.append(state)
@@ -307,6 +324,8 @@ def _two_point_onset(p: Insertion, states: list) -> float | None:
                     raise RuntimeError(f"one-point branch lost at depth {s}")
                 _, tip = pose(p, s, solution[0], solution[1])
                 return contact(p, new, tip, solution[1])[0]
+            if gap(before.s) * gap(after.s) > 0:  # the one-point branch ends for another reason
+                return after.s
             return float(brentq(gap, before.s, after.s, xtol=1e-10))
     return None
 
