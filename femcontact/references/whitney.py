@@ -279,8 +279,9 @@ def inside_friction_cones(p: Insertion, state: State) -> bool:
 
 def insertion(p: Insertion, depth_max: float, points: int = 201) -> dict:
     """Force history from the chamfer top to depth_max (mm) on `points` depths, with the
-    two-point onset (refined by root finding), the in-hole peak force and its depth (refined),
-    the chamfer peak, and the wedging and jamming flags."""
+    two-point onset (refined by root finding), the peak force after the chamfer crossing and its
+    depth (refined), the chamfer peak, and the wedging and jamming flags. `jams`: at some depth
+    no sliding equilibrium exists (the history stops there, at `jam_depth`)."""
     check(p)
     if not (math.isfinite(depth_max) and depth_max > 0):
         raise InputError(f"--depth-max = {depth_max}: must be a finite depth > 0")
@@ -331,12 +332,13 @@ def _two_point_onset(p: Insertion, states: list) -> float | None:
 
 
 def _in_hole_peak(p: Insertion, states: list) -> State | None:
-    """Largest insertion force at depth >= 0, refined between the grid neighbours."""
-    inside = [i for i, st in enumerate(states) if st.s >= 0]
+    """Largest insertion force after the chamfer crossing (one-point, two-point or line
+    contact), refined between its grid neighbours when they are in the hole too."""
+    inside = [i for i, st in enumerate(states) if st.phase in ("one_point", "two_point", "line")]
     if not inside:
         return None
     i = max(inside, key=lambda j: states[j].Fz)
-    if 0 < i < len(states) - 1 and states[i - 1].s >= 0:
+    if i - 1 in inside and i + 1 in inside:
         lo, hi = states[i - 1].s, states[i + 1].s
         best = minimize_scalar(lambda s: -_force_at(p, s), bounds=(lo, hi), method="bounded",
                                options={"xatol": 1e-6 * (hi - lo)})
