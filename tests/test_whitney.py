@@ -298,7 +298,7 @@ def test_cli_table_and_plots(capsys, tmp_path):
 @pytest.mark.parametrize("option, value", [("--kx", "-1"), ("--ktheta", "0"), ("--mu", "-0.1"),
                                            ("--hole-diameter", "12.6"), ("--lg", "nan"),
                                            ("--angular-error", "inf"), ("--chamfer-angle", "90"),
-                                           ("--lateral-error", "5"), ("--depth-max", "0"), ("--points", "2")])
+                                           ("--lateral-error", "5"), ("--lateral-error", "-5"), ("--depth-max", "0"), ("--points", "2")])
 def test_cli_bad_values_exit_2_naming_the_option(option, value, capsys):
     args = list(ARGS)
     args[args.index(option) + 1] = value
@@ -317,3 +317,29 @@ def test_entry_tilt_and_compliance_factor():
     frictionless = replace(CASE, mu=0.0)
     _, theta, _ = w.one_point(frictionless, 0.0)
     assert theta == pytest.approx(-w.compliance_factor(CASE) * (CASE.lateral_error - CASE.clearance / 2), rel=1e-12)
+
+
+def test_chamfer_locks_when_its_compliance_is_negative():
+    """1/K_x + L_g (L_g - r k_a)/K_theta < 0 (steep chamfer, mu = 0.5, soft K_theta): the
+    chamfer's friction turns the peg into it, no sliding equilibrium exists on the chamfer and
+    the insertion jams there; with K_theta = 53000 (compliance > 0) it crosses."""
+    p = replace(CASE, mu=0.5, chamfer_angle=math.radians(60), ktheta=5000.0)
+    k_a = w.chamfer_gain(p.chamfer_angle, p.mu)
+    assert 1 / p.kx + p.lg * (p.lg - p.r * k_a) / p.ktheta < 0
+    result = w.insertion(p, 5.0, 41)
+    assert result["jams"] and result["jam_depth"] < 0 and set(result["phase"]) <= {"none", "chamfer"}
+    crossing = w.insertion(replace(p, ktheta=53000.0), 5.0, 41)
+    assert not crossing["jams"] and "one_point" in crossing["phase"]
+
+
+@pytest.mark.parametrize("eps0, theta0", [(1.9, 0.0), (0.8, 0.5), (-0.3, -1.0)])
+def test_mirror_symmetry(eps0, theta0):
+    """Reflecting the errors (eps0, theta0) -> (-eps0, -theta0) reflects the history: same F_z
+    and phases, F_x, M and theta change sign."""
+    p = replace(CASE, lateral_error=eps0, angular_error=math.radians(theta0))
+    q = replace(p, lateral_error=-eps0, angular_error=-p.angular_error)
+    a, b = w.insertion(p, 20.0, 31), w.insertion(q, 20.0, 31)
+    assert a["phase"] == b["phase"] and a["jams"] == b["jams"]
+    assert np.allclose(a["Fz"], b["Fz"], rtol=1e-7, atol=1e-9)
+    for key in ("Fx", "M", "theta"):
+        assert np.allclose(a[key], -np.array(b[key]), rtol=1e-7, atol=1e-9)

@@ -93,7 +93,7 @@ def check(p: Insertion) -> None:
                          f"below the chamfer angle {math.degrees(p.chamfer_angle)} deg (the tip corner leads)")
     _, n = axes(p.angular_error)
     for side in (-1, 1):
-        reach = side * p.lateral_error + p.r * side * n[0]
+        reach = side * p.lateral_error + p.r * n[0]
         if reach > 0.5 * p.hole_diameter + p.chamfer_width:
             raise InputError(f"--lateral-error = {p.lateral_error}: the peg misses the chamfer "
                              f"(tip corner {reach:.4g} mm from the axis, chamfer mouth "
@@ -206,16 +206,30 @@ def _state(p: Insertion, s: float, active: tuple, u: float, theta: float, forces
 
 
 def solve_set(p: Insertion, s: float, active: tuple, guess=None):
-    """Equilibrium with the contacts `active` closed and sliding; (u, theta, forces) or None."""
+    """Equilibrium with the contacts `active` closed and sliding; (u, theta, forces) or None.
+    Two closed contacts fix the pose by geometry alone (two gaps in u, theta); the balance is
+    then linear in their forces. One contact is solved together with its force."""
     if not active:
         return 0.0, p.angular_error, ()
-    kref = _reference_stiffness(p)
     if guess is None:
         guess = np.r_[0.0, p.angular_error * p.peg_diameter, np.full(len(active), 1e-3 * p.clearance)]
-    sol = root(lambda y: _residual(p, s, active, y), guess, method="hybr", options={"xtol": 1e-13})
-    if not np.all(np.isfinite(sol.x)) or np.max(np.abs(_residual(p, s, active, sol.x))) > 1e-10 * p.peg_diameter:
+    if len(active) == 2:
+        def gaps(y):
+            _, tip = pose(p, s, y[0], y[1] / p.peg_diameter)
+            return [contact(p, k, tip, y[1] / p.peg_diameter)[0] for k in active]
+        placed = root(gaps, guess[:2], method="hybr", options={"xtol": 1e-14}).x
+        base = _residual(p, s, active, np.r_[placed, 0.0, 0.0])[:2]
+        balance = np.column_stack([_residual(p, s, active, np.r_[placed, unit])[:2] - base for unit in np.eye(2)])
+        if not np.all(np.isfinite(balance)) or np.linalg.cond(balance) > 1e12:
+            return None
+        y = np.r_[placed, np.linalg.solve(balance, -base)]
+    else:
+        y = root(lambda y: _residual(p, s, active, y), guess, method="hybr", options={"xtol": 1e-13}).x
+        if not np.all(np.isfinite(y)) or np.max(np.abs(_residual(p, s, active, y))) > 1e-10 * p.peg_diameter:
+            y = root(lambda y: _residual(p, s, active, y), guess, method="lm", options={"xtol": 1e-15}).x
+    if not np.all(np.isfinite(y)) or np.max(np.abs(_residual(p, s, active, y))) > 1e-10 * p.peg_diameter:
         return None
-    return sol.x[0], sol.x[1] / p.peg_diameter, tuple(sol.x[2:] * kref)
+    return y[0], y[1] / p.peg_diameter, tuple(y[2:] * _reference_stiffness(p))
 
 
 def feasible(p: Insertion, s: float, active: tuple, u: float, theta: float, forces) -> bool:
@@ -242,20 +256,44 @@ def gap_position(p: Insertion, k: int, tip, theta: float) -> float:
     return point[1]
 
 
-def solve_depth(p: Insertion, s: float, previous: dict | None = None, current: tuple | None = None) -> State | None:
-    """Equilibrium at depth s: the current active set while it stays feasible (the path the
-    insertion follows where branches overlap, e.g. at the chamfer's end), else the feasible set
-    with the fewest closed contacts (None: no sliding equilibrium, the peg jams). `previous`
-    maps active sets to earlier solutions, used as starting guesses and updated."""
+def neighbours(active: tuple) -> list:
+    """Active sets one step away along a sliding path: one contact closed or released, or one
+    contact handed over to another candidate on the same side of the hole (a corner moving from
+    the chamfer to the wall, or from the chamfer onto the edge)."""
+    now = set(active)
+    steps = []
+    for other in ACTIVE_SETS:
+        change = now ^ set(other)
+        if len(change) == 1 or (len(change) == 2 and len(now & change) == 1
+                                and len({CANDIDATES[k][1] for k in change}) == 1):
+            steps.append(other)
+    return steps
+
+
+def solve_depth(p: Insertion, s: float, previous: dict | None = None, last: State | None = None) -> State | None:
+    """Equilibrium at depth s. Without `last`: the admissible set with the fewest closed contacts.
+    After the state `last`: its set while admissible (branches overlap, e.g. at the chamfer's
+    end), else the admissible neighbouring set nearest to its pose; None when there is none: no
+    sliding equilibrium continues the path, the peg jams. `previous` maps active sets to earlier
+    solutions, used as starting guesses and updated."""
     previous = {} if previous is None else previous
-    order = ([current] if current is not None else []) + [a for a in ACTIVE_SETS if a != current]
-    for active in order:
+
+    def admissible(active):
         solution = solve_set(p, s, active, previous.get(active))
-        if solution is not None and feasible(p, s, active, *solution):
-            u, theta, forces = solution
-            previous[active] = np.r_[u, theta * p.peg_diameter, np.array(forces) / _reference_stiffness(p)]
-            return _state(p, s, active, *solution)
-    return None
+        if solution is None or not feasible(p, s, active, *solution):
+            return None
+        previous[active] = np.r_[solution[0], solution[1] * p.peg_diameter,
+                                 np.array(solution[2]) / _reference_stiffness(p)]
+        return _state(p, s, active, *solution)
+
+    if last is None:
+        return next((state for state in map(admissible, ACTIVE_SETS) if state is not None), None)
+    state = admissible(last.active)
+    if state is not None:
+        return state
+    found = [state for state in map(admissible, neighbours(last.active)) if state is not None]
+    return min(found, key=lambda st: abs(st.u - last.u) + p.peg_diameter * abs(st.theta - last.theta),
+               default=None)
 
 
 def start_depth(p: Insertion) -> float:
@@ -267,7 +305,7 @@ def start_depth(p: Insertion) -> float:
 def inside_friction_cones(p: Insertion, state: State) -> bool:
     """Two-point contact whose contact points lie inside each other's friction cones (the
     necessary condition for wedging): the line joining them within atan(mu) of both normals."""
-    if len(state.active) != 2:
+    if state.phase != "two_point":
         return False
     _, tip = pose(p, state.s, state.u, state.theta)
     (_, p1, _, n1, _), (_, p2, _, n2, _) = (contact(p, k, tip, state.theta) for k in state.active)
@@ -289,7 +327,7 @@ def insertion(p: Insertion, depth_max: float, points: int = 201) -> dict:
         raise InputError(f"--points = {points}: need at least 3")
     guesses, states = {}, []
     for s in np.linspace(start_depth(p), depth_max, points):
-        state = solve_depth(p, float(s), guesses, states[-1].active if states else None)
+        state = solve_depth(p, float(s), guesses, states[-1] if states else None)
         if state is None:
             break
         states.append(state)
@@ -340,16 +378,16 @@ def _in_hole_peak(p: Insertion, states: list) -> State | None:
     i = max(inside, key=lambda j: states[j].Fz)
     if i - 1 in inside and i + 1 in inside:
         lo, hi = states[i - 1].s, states[i + 1].s
-        best = minimize_scalar(lambda s: -_force_at(p, s), bounds=(lo, hi), method="bounded",
+        best = minimize_scalar(lambda s: -_force_at(p, s, states[i - 1]), bounds=(lo, hi), method="bounded",
                                options={"xatol": 1e-6 * (hi - lo)})
-        refined = solve_depth(p, float(best.x))
+        refined = solve_depth(p, float(best.x), last=states[i - 1])
         if refined is not None and refined.Fz > states[i].Fz:
             return refined
     return states[i]
 
 
-def _force_at(p: Insertion, s: float) -> float:
-    state = solve_depth(p, s)
+def _force_at(p: Insertion, s: float, last: State) -> float:
+    state = solve_depth(p, s, last=last)
     return state.Fz if state is not None else 0.0
 
 
