@@ -156,7 +156,7 @@ def test_forces_at_the_phase_changes():
     before, after = w.solve_depth(CASE, lo), w.solve_depth(CASE, hi)
     assert (before.phase, after.phase) == ("chamfer", "one_point")
     _, tip = w.pose(CASE, lo, before.u, before.theta)
-    assert abs(w.gap_position(CASE, before.active[0], tip, before.theta)) < 2e-9 * CASE.peg_diameter
+    assert abs(w.segment_end_offset(CASE, before.active[0], tip, before.theta)) < 2e-9 * CASE.peg_diameter
     assert after.Fx == pytest.approx(before.Fx, rel=0.05)
     assert before.Fz / before.Fx == pytest.approx(w.chamfer_gain(CASE.chamfer_angle, CASE.mu), rel=1e-12)
     assert after.Fz / after.Fx == pytest.approx(CASE.mu + abs(after.theta), rel=abs(after.theta))

@@ -239,14 +239,14 @@ def feasible(p: Insertion, s: float, active: tuple, u: float, theta: float, forc
     _, tip = pose(p, s, u, theta)
     for k in range(len(CANDIDATES)):
         gap, _, _, _, reachable = contact(p, k, tip, theta)
-        if k in active and not reachable and abs(gap_position(p, k, tip, theta)) > 1e-9 * p.peg_diameter:
+        if k in active and not reachable and abs(segment_end_offset(p, k, tip, theta)) > 1e-9 * p.peg_diameter:
             return False
         if k not in active and reachable and gap < -1e-9 * p.clearance:
             return False
     return True
 
 
-def gap_position(p: Insertion, k: int, tip, theta: float) -> float:
+def segment_end_offset(p: Insertion, k: int, tip, theta: float) -> float:
     """How far (mm) candidate k's contact lies beyond the end of its segment (the corner's height
     for chamfer and wall contacts, the edge's distance along the peg from the tip); the sign is
     irrelevant, only |value| <= round-off admits a contact at the very end."""
