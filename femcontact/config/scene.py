@@ -238,7 +238,8 @@ def petsc_option_problems(options: dict) -> list[str]:
             problems.append(f"solver.petsc_options.{key} = {value!r}: names no {kind.split('.')[0]} type of PETSc "
                             f"(known: {', '.join(sorted(known))})")
         elif key == "pc_factor_mat_solver_type" and not _factorization_available(value):
-            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it (not built in)")
+            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it "
+                            "(not built in)")
     return problems
 
 
@@ -247,7 +248,8 @@ def _petsc_names(kind: str) -> frozenset:
     from petsc4py import PETSc
 
     table = {"KSP": PETSc.KSP.Type, "PC": PETSc.PC.Type, "Mat.Solver": PETSc.Mat.SolverType}[kind]
-    return frozenset(value for name, value in vars(table).items() if not name.startswith("_") and isinstance(value, str))
+    return frozenset(value for name, value in vars(table).items()
+                     if not name.startswith("_") and isinstance(value, str))
 
 
 @functools.lru_cache

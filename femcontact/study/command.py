@@ -12,7 +12,8 @@ from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir
 from femcontact.study import slurm
 from femcontact.study.database import Database
-from femcontact.study.runner import Case, Progress, Runner, Study, _check_launcher, _describe, load_study, read_result
+from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, load_study,
+                                     read_result)
 
 
 def add_arguments(parser):
