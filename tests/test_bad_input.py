@@ -169,6 +169,14 @@ def test_run_refuses_checkpoint_requests_that_cannot_work(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_bad_input_under_mpirun_is_one_message(tmp_path, capsys, monkeypatch):
+    """Every rank finds the error; only rank 0 of the launch prints it."""
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "1")
+    assert cli(capsys, "run", WEDGING, *sets("contact.mu=nan"), "--out", tmp_path / "o") == (2, "")
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "0")
+    assert_refused(*cli(capsys, "run", WEDGING, *sets("contact.mu=nan"), "--out", tmp_path / "o"), "contact.mu")
+
+
 def test_run_refuses_a_malformed_override(tmp_path, capsys):
     assert_refused(*cli(capsys, "run", WEDGING, "--set", "peg.insertion_depth", "--out", tmp_path / "o"),
                    "expected KEY=VALUE")

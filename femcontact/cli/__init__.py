@@ -42,8 +42,21 @@ def main(argv=None) -> int:
     try:
         return module.command(args) or 0
     except InputError as error:
-        print(f"femcontact {argv[0]}: error: {error}", file=sys.stderr)
+        if launch_rank() == 0:  # under mpirun every rank finds the same error: one message
+            print(f"femcontact {argv[0]}: error: {error}", file=sys.stderr)
         return 2
+
+
+RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+"""Where MPI launchers (Open MPI, PMIx, MPICH/Hydra) put a process's rank, before MPI starts."""
+
+
+def launch_rank() -> int:
+    """This process's rank in its MPI launch, read from the launcher's environment (0 outside one)."""
+    for name in RANK_VARIABLES:
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
 
 
 if __name__ == "__main__":
