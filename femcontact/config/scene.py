@@ -211,11 +211,11 @@ def _check_contact(scene: dict) -> None:
     check_mesh(scene)  # an element-count estimate: a mesh too large or too coarse is refused before gmsh runs
 
 
-PETSC_FAMILIES = ("ksp_", "pc_", "mat_")
+PETSC_FAMILIES = ("ksp_", "pc_", "mat_", "mg_")  # mg_levels_* and mg_coarse_* tune multigrid levels
 
 
 def petsc_option_problems(options: dict) -> list[str]:
-    """Complaints about solver.petsc_options: prefix-free names of linear-solver options (ksp_*, pc_*,
+    """Complaints about solver.petsc_options: prefix-free names of linear-solver options (ksp_*, pc_*, mg_*,
     mat_*), scalar finite values, and ksp_type, pc_type, pc_factor_mat_solver_type naming a KSP, PC and
     factorisation package this PETSc has."""
     problems = []
