@@ -20,7 +20,6 @@ import time
 from femcontact.errors import InputError
 
 
-
 def _process_age() -> float:
     """Seconds since this process started (Linux /proc; elsewhere since this module's import)."""
     try:
