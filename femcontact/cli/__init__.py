@@ -6,6 +6,7 @@ provides `add_arguments(parser)` and `command(args) -> int`.
 """
 import argparse
 import importlib
+import logging
 import os
 import sys
 
@@ -28,6 +29,9 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 def main(argv=None) -> int:
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
+    # FFCx's JIT compiles through setuptools, which logs every compiler call at INFO on the root
+    # logger: keep warnings and errors only, so a run's output is its progress
+    logging.getLogger().addFilter(lambda record: record.levelno >= logging.WARNING)
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = argparse.ArgumentParser(prog="femcontact", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
