@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from femcontact import hertz
-from femcontact.scene import resolve
-from femcontact.simulation import Simulation
+from femcontact.references.hertz import benchmark_half_width
+from femcontact.scenarios import hertz
+from femcontact.config.scene import resolve
+from femcontact.solver.stepping import Simulation
 
 
 def simulate(data: dict) -> Simulation:
@@ -48,7 +49,7 @@ def finite(simulation) -> bool:
 @pytest.fixture(scope="module")
 def hertz_levels():
     """Contact sizes a/2.5, a/5.5, a/10.5: x = a falls mid-element on each level."""
-    a, _ = hertz.analytic(500.0, 50.0, 200000.0, 0.3)
+    a = benchmark_half_width()
     return [hertz.run(a / (k + 0.5)) for k in (2, 5, 10)]
 
 
@@ -67,7 +68,7 @@ def test_hertz_errors_fall_under_refinement(hertz_levels):
 
 def test_hertz_does_not_depend_on_nitsche_parameter():
     """gamma over a decade (10 -> 100) changes a and p0 by less than 1 % (Nitsche is consistent)."""
-    a, _ = hertz.analytic(500.0, 50.0, 200000.0, 0.3)
+    a = benchmark_half_width()
     low, high = (hertz.run(a / 5.5, gamma=gamma) for gamma in (10.0, 100.0))
     assert abs(low["a"] / high["a"] - 1) < 0.01
     assert abs(low["p0"] / high["p0"] - 1) < 0.01
@@ -77,6 +78,17 @@ def test_hertz_reaction_balances_load():
     simulation = Simulation(hertz.scene(0.1))
     simulation.run()
     assert simulation.history[-1]["reaction_bottom_y"] == pytest.approx(500.0, rel=1e-6)
+
+
+def test_hertz_newton_iterations_from_a_cold_contact_set():
+    """At most 8 Newton iterations per increment on a fine contact zone (h_c = a/32.5, 2
+    increments, force control), the first from a cold contact set. The monotone backtracking
+    line search this replaced failed the first increment there (40 iterations) and then took
+    39 and 10 after the cut: the iterations grew with refinement."""
+    simulation = Simulation(hertz.scene(benchmark_half_width() / 32.5))
+    simulation.run()
+    assert len(simulation.history) == 2
+    assert all(row["newton_iterations"] <= 8 for row in simulation.history)
 
 
 # -- Coulomb friction -----------------------------------------------------------------------
@@ -170,7 +182,7 @@ def test_very_small_and_very_large_single_load_steps(load):
 def test_failure_is_structured_not_nan():
     """A free peg pulled out of the hole has no quasi-static equilibrium: the run must end
     with a SimulationFailed naming the step and time, after bounded step cuts."""
-    from femcontact.simulation import SimulationFailed
+    from femcontact.solver.stepping import SimulationFailed
 
     data = wedging()
     data["steps"] = [{"name": "pull", "increments": 1, "force": [0.0, 50.0]}]

@@ -1,0 +1,349 @@
+"""Scene files: one simulation described in TOML, validated against a schema.
+
+A scene names its `kind` ("contact": the finite-element contact solver; "rcc": the
+RCC truss), its geometry, materials, contact parameters, the physical `effects`
+it calls for, and its load steps. `load_scene` returns the fully resolved scene
+(every default filled in); `case_id` hashes it, so two files that differ only in
+key order or formatting describe the same case.
+"""
+import functools
+import hashlib
+import json
+import math
+import tomllib
+from pathlib import Path
+
+from femcontact.config.presets import PRESETS, apply_preset
+from femcontact.errors import InputError
+from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+
+EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress")
+RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
+
+
+def _material(E=193000.0, nu=0.27, density=8.05e-9, yield_stress=210.0) -> dict:
+    """Defaults: stainless steel 316 as in the reference's wedging simulation."""
+    return {
+        "E": Field("float", E, "Young's modulus (MPa)", positive=True),
+        "nu": Field("float", nu, "Poisson's ratio", min=0.0, max=0.4999),
+        "density": Field("float", density, "density (t/mm^3)", min=0.0),
+        "yield_stress": Field("float", yield_stress, "initial yield stress (MPa), checked not modelled", positive=True),
+    }
+
+
+PEG = {
+    "width": Field("float", doc="peg width d in 2-D, diameter in 3-D (mm)", positive=True),
+    "length": Field("float", doc="peg length (mm)", positive=True),
+    "insertion_depth": Field("float", doc="l_d: length of peg inside the hole, along the peg axis (mm)", min=0.0),
+    "placement": Field("str", "two_point", "'two_point': tilt theta(l_d) touching both walls (less `gap`); "
+                       "'centred': axis through the hole centre at `tilt`", choices=("two_point", "centred")),
+    "tilt": Field("float", 0.0, "tilt (deg, counter-clockwise) for placement 'centred'", min=-89.0, max=89.0),
+    "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
+                 min=0.0),
+    "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
+    "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
+    "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
+}
+
+HOLE = {
+    "width": Field("float", doc="hole width D in 2-D, diameter in 3-D (mm)", positive=True),
+    "kind": Field("str", "two_blocks", "'two_blocks' (2-D: separate blocks A and B) or 'single' "
+                  "(one U-shaped block in 2-D, a block with a cylindrical hole in 3-D)",
+                  choices=("two_blocks", "single")),
+    "depth": Field("float", 20.0, "hole depth (mm)", positive=True),
+    "block_width": Field("float", 20.0, "width of each block beside the hole (mm)", positive=True),
+    "bottom_thickness": Field("float", 10.0, "material below the hole bottom, 'single' only (mm)", positive=True),
+    "chamfer_width": Field("float", 0.0, "hole-mouth chamfer width (mm)", min=0.0),
+    "chamfer_angle": Field("float", 45.0, "hole-mouth chamfer angle from the axis (deg)", min=1.0, max=89.0),
+    "support": Field("str", "outer", "fixed edge/face: 'outer' sides or 'bottom'", choices=("outer", "bottom")),
+}
+
+BLOCK = {
+    "width": Field("float", 100.0, "block width in x (mm)", positive=True),
+    "height": Field("float", 50.0, "block height in y (2-D) or z (3-D) (mm); top face at 0", positive=True),
+    "depth": Field("float", 100.0, "block depth in y, 3-D only (mm)", positive=True),
+}
+
+INDENTER = {
+    "shape": Field("str", "cylinder", "rigid indenter: 'cylinder' (disc in 2-D) or 'flat' (a rigid plate)",
+                   choices=("cylinder", "flat")),
+    "radius": Field("float", 50.0, "cylinder radius (mm)", positive=True),
+    "width": Field("float", 20.0, "flat indenter width (mm)", positive=True),
+}
+
+MESH = {
+    "resolution": Field("float", 1.0, "global refinement knob: every mesh size is divided by it", positive=True),
+    "contact_size": Field("float", 0.0, "element size in the contact zones (mm); 0 = automatic", min=0.0),
+    "size_max": Field("float", 0.0, "largest element size (mm); 0 = automatic", min=0.0),
+    "contact_zone": Field("float", 0.0, "half-length of each fine contact zone (mm), independent of "
+                          "`resolution`; 0 = automatic (see docs/geometry.md)", min=0.0),
+    "degree": Field("int", 1, "Lagrange degree of the displacement", choices=(1, 2)),
+}
+
+CONTACT = {
+    "mu": Field("float", 0.2, "Coulomb friction coefficient (used with the 'friction' effect)", min=0.0),
+    "method": Field("str", "nitsche", "'nitsche' (consistent) or 'penalty' (less accurate: penetration ~ p/gamma)",
+                    choices=("nitsche", "penalty")),
+    "gamma": Field("float", 10.0, "normal parameter: gamma_N = gamma * E / h (dimensionless)", positive=True),
+    "gamma_t": Field("float", 0.0, "tangential parameter gamma_T = gamma_t * E / h; 0 = same as gamma", min=0.0),
+    "theta": Field("float", 0.0, "Nitsche variant: 1 symmetric, 0 skew-less, -1 skew-symmetric",
+                   choices=(-1.0, 0.0, 1.0)),
+}
+
+STEP = {
+    "name": Field("str", "step", "step name"),
+    "duration": Field("float", 1.0, "step duration (s)", positive=True),
+    "increments": Field("int", 10, "number of increments", min=1),
+    "force": Field("floats", [], "force on the rigid body at `load_point` at the end of the step (N), [Fx, Fy(, Fz)]"),
+    "moment": Field("floats", [], "moment on the rigid body (N*mm): Mz in 2-D, [Mx, My, Mz] in 3-D"),
+    "load_point": Field("str", "peg_top", "named point where the force acts (e.g. peg_top, contact_A, peg_tip)"),
+    "amplitude": Field("str", "ramp", "'ramp': linear from the previous step's value; 'step': at once; "
+                       "'pulse': the value times a pulse train", choices=("ramp", "step", "pulse")),
+    "pulse": {
+        "frequency": Field("float", 10.0, "pulse frequency (Hz)", positive=True),
+        "duty": Field("float", 1.0, "fraction of each period the pulse lasts", positive=True, max=1.0),
+        "shape": Field("str", "triangle", "pulse shape", choices=("triangle", "square", "haversine")),
+    },
+    "motion": {name: Field("float", 0.0, "prescribed rigid-body displacement (mm) or rotation (rad) at the "
+                           "end of the step, for dofs set 'prescribed'") for name in RIGID_DOFS[3]},
+}
+
+SOLVER = {
+    "max_iterations": Field("int", 40, "Newton iterations per increment", min=1),
+    "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
+    "atol": Field("float", 1e-6, "absolute residual tolerance (N); the round-off floor of the contact "
+                  "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
+                  positive=True),
+    "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
+    "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
+                         "root of R.d or backtracking"),
+    "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
+                           check=lambda v: None if isinstance(v, dict) else "must be a table"),
+}
+
+DYNAMICS = {
+    "newmark_beta": Field("float", 0.3025, "Newmark beta (0.25: no numerical damping)", positive=True, max=0.5),
+    "newmark_gamma": Field("float", 0.6, "Newmark gamma (0.5: no numerical damping)", min=0.5, max=1.0),
+    "deformable_inertia": Field("bool", False, "with 'inertia': also the deformable body's mass (else the rigid body only)"),
+    "gravity": Field("float", 9810.0, "gravitational acceleration for the 'gravity' effect (mm/s^2)", min=0.0),
+}
+
+OUTPUTS = {
+    "fields": Field("bool", False, "write displacement, von Mises and contact pressure to XDMF"),
+}
+
+
+def contact_schema(dim: int, geometry: str) -> dict:
+    """Schema of a contact scene for the given dimension and geometry."""
+    schema = {
+        "kind": Field("str", "contact", choices=("contact", "rcc")),
+        "accuracy": Field("str", "custom", "preset of mesh and solver keys the scene leaves unset "
+                          "(docs/accuracy.md): 'fast', 'balanced', 'accurate', or 'custom' (none)",
+                          choices=tuple(PRESETS)),
+        "name": Field("str", "scene", "scene name"),
+        "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
+        "geometry": Field("str", "peg_in_hole", "'peg_in_hole' or 'block' (a block under a rigid indenter)",
+                          choices=("peg_in_hole", "block")),
+        "rigid": Field("str", "peg" if geometry == "peg_in_hole" else "indenter", "the rigid body",
+                       choices=("peg", "hole") if geometry == "peg_in_hole" else ("indenter",)),
+        "effects": Field("strs", ["plane_strain"] if dim == 2 else [], "physics the scene calls for", choices=EFFECTS),
+        "mesh": MESH,
+        "contact": CONTACT,
+        "rigid_body": {
+            "dofs": {name: Field("str", "free", "'free' (driven by loads), 'held' or 'prescribed' (by steps.motion)",
+                                 choices=("free", "held", "prescribed")) for name in RIGID_DOFS[dim]},
+            "mass": Field("float", 0.0, "rigid body mass (t); 0 = from its geometry and density", min=0.0),
+        },
+        "steps": TableList(STEP, "load steps, in order"),
+        "dynamics": DYNAMICS,
+        "solver": SOLVER,
+        "outputs": OUTPUTS,
+    }
+    if geometry == "peg_in_hole":
+        hole = dict(HOLE)
+        if dim == 3:
+            hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
+        schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
+    else:
+        schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
+        step = {**STEP, "load_point": Field("str", "indenter", "named point where the force acts: 'indenter' "
+                                            "(its reference point), 'contact' or 'reference'")}
+        schema["steps"] = TableList(step, schema["steps"].doc)
+    return schema
+
+
+def _check_contact(scene: dict) -> None:
+    dim, effects = scene["dim"], scene["effects"]
+    problems = []
+    if "plane_strain" in effects and "plane_stress" in effects:
+        problems.append(f"effects = {effects}: 'plane_strain' and 'plane_stress' exclude each other")
+    if dim == 3 and {"plane_strain", "plane_stress"} & set(effects):
+        problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
+    moment_length = 1 if dim == 2 else 3
+    if not scene["steps"]:
+        problems.append("steps = []: a contact scene needs at least one [[steps]] table")
+    names = [step["name"] for step in scene["steps"]]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            problems.append(f"steps[{i}].name = {name!r}: also the name of steps[{names.index(name)}] "
+                            "(step names key the metrics, they must differ)")
+    problems += petsc_option_problems(scene["solver"]["petsc_options"])
+    for i, step in enumerate(scene["steps"]):
+        if step["force"] and len(step["force"]) != dim:
+            problems.append(f"steps[{i}].force = {step['force']}: expected {dim} components")
+        if step["moment"] and len(step["moment"]) != moment_length:
+            problems.append(f"steps[{i}].moment = {step['moment']}: expected {moment_length} component(s)")
+        for name, value in step["motion"].items():
+            if value and scene["rigid_body"]["dofs"].get(name) != "prescribed":
+                problems.append(f"steps[{i}].motion.{name} = {value}: rigid_body.dofs.{name} is not 'prescribed'")
+    if problems:
+        raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
+    if scene["geometry"] == "peg_in_hole":
+        from geometry.placement import check_peg_in_hole
+
+        check_peg_in_hole(scene)
+    from geometry.model import check_mesh, points
+
+    known = sorted([*points(scene), "reference"])
+    for i, step in enumerate(scene["steps"]):
+        if step["load_point"] not in known:
+            raise InputError(f"steps[{i}].load_point = {step['load_point']!r}: unknown point, expected one of "
+                             + ", ".join(known))
+    check_mesh(scene)  # an element-count estimate: a mesh too large or too coarse is refused before gmsh runs
+
+
+PETSC_FAMILIES = ("ksp_", "pc_", "mat_", "mg_")  # mg_levels_* and mg_coarse_* tune multigrid levels
+
+
+def petsc_option_problems(options: dict) -> list[str]:
+    """Complaints about solver.petsc_options: prefix-free names of linear-solver options (ksp_*, pc_*, mg_*,
+    mat_*), scalar finite values, and ksp_type, pc_type, pc_factor_mat_solver_type naming a KSP, PC and
+    factorisation package this PETSc has."""
+    problems = []
+    for key, value in options.items():
+        name = f"solver.petsc_options.{key}"
+        if not key.startswith(PETSC_FAMILIES):
+            problems.append(f"{name}: not a linear-solver option (expected a name starting with "
+                            f"{', '.join(PETSC_FAMILIES)}, without '-' or a prefix)")
+        elif not isinstance(value, (str, int, float, bool)):
+            problems.append(f"{name} = {value!r}: expected a string, number or true/false")
+        elif isinstance(value, float) and not math.isfinite(value):
+            problems.append(f"{name} = {value!r}: not a finite number")
+    kinds = {"ksp_type": "KSP", "pc_type": "PC", "pc_factor_mat_solver_type": "Mat.Solver"}
+    for key, kind in kinds.items():
+        value = options.get(key)
+        if value is None:
+            continue
+        known = _petsc_names(kind)
+        if value not in known:
+            problems.append(f"solver.petsc_options.{key} = {value!r}: names no {kind.split('.')[0]} type of PETSc "
+                            f"(known: {', '.join(sorted(known))})")
+        elif key == "pc_factor_mat_solver_type" and not _factorization_available(value):
+            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it "
+                            "(not built in)")
+    return problems
+
+
+@functools.lru_cache
+def _petsc_names(kind: str) -> frozenset:
+    from petsc4py import PETSc
+
+    table = {"KSP": PETSc.KSP.Type, "PC": PETSc.PC.Type, "Mat.Solver": PETSc.Mat.SolverType}[kind]
+    return frozenset(value for name, value in vars(table).items()
+                     if not name.startswith("_") and isinstance(value, str))
+
+
+@functools.lru_cache
+def _factorization_available(package: str) -> bool:
+    """Whether PETSc can LU-factor a 2x2 matrix with `package` (a few ms)."""
+    from petsc4py import PETSc
+
+    matrix = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
+    for i in range(2):
+        matrix.setValue(i, i, 1.0)
+    matrix.assemble()
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOperators(matrix)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType(package)
+    try:
+        ksp.setUp()
+        return True
+    except PETSc.Error:
+        return False
+    finally:
+        ksp.destroy()
+        matrix.destroy()
+
+
+def resolve(data: dict, overrides=()) -> dict:
+    """Validate raw scene data (plus 'key=value' overrides) and return the resolved scene."""
+    data = json.loads(json.dumps(data))  # deep copy, plain types
+    for text in overrides:
+        set_key(data, *parse_assignment(text))
+    kind = data.get("kind", "contact")
+    if kind == "rcc":
+        from femcontact.rcc import device as rcc
+
+        scene = validate(data, rcc.SCHEMA)
+        rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running
+        return scene
+    if kind == "dislodging":
+        return _resolve_dislodging(data)
+    if kind != "contact":
+        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc', 'dislodging'")
+    head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
+                    {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
+    if isinstance(data.get("accuracy"), str):
+        apply_preset(data)
+    scene = validate(data, contact_schema(head["dim"], head["geometry"]))
+    _check_contact(scene)
+    return scene
+
+
+def _resolve_dislodging(data: dict) -> dict:
+    """A dislodging scene: a 2-D peg-in-hole contact scene plus its [dislodging] table."""
+    from femcontact.config import dislodging
+
+    data = dict(data)
+    table = data.pop("dislodging", {})
+    if not isinstance(table, dict):
+        raise InputError(f"dislodging = {table!r}: expected a table")
+    scene = validate({**data, "kind": "contact"}, contact_schema(2, "peg_in_hole"))
+    _check_contact(scene)
+    scene["dislodging"] = validate(table, dislodging.DISLODGING, "dislodging.")
+    scene["kind"] = "dislodging"
+    dislodging.check(scene)
+    return scene
+
+
+def read_toml(path) -> dict:
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: a directory, expected a TOML file") from None
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not a UTF-8 text file (byte {error.start}: {error.reason}); "
+                         "TOML files are UTF-8") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror or error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: not valid TOML: {error}") from None
+
+
+def load_scene(path, overrides=()) -> dict:
+    """Read, override and validate a scene file."""
+    try:
+        return resolve(read_toml(path), overrides)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def case_id(scene: dict) -> str:
+    """Stable 12-hex-digit id of a resolved scene: key order and number formatting do not matter."""
+    text = json.dumps(scene, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]

@@ -1,0 +1,422 @@
+"""Dislodging a wedged peg by pulling (reference §2, thesis ch. 4; issue 13).
+
+A scene of kind "dislodging" is a 2-D peg-in-hole contact scene whose first two steps
+wedge the peg (quasi-static) and whose steps 3-4 pull and observe; its `[dislodging]`
+table says what one case of the study does from the wedged state, in one process
+(the wedged state is computed once, or restored from the study's shared prefix):
+
+- always: the quasi-static pull-out force (the largest pull with a quasi-static
+  equilibrium, no inertia, by bisection; computed with the wedged state and kept in its
+  checkpoint, so a study computes it once per case) and the 1-DOF estimates
+  (`one_dof_thresholds`);
+- method "continuous" / "pulse": one dynamic pull (scenarios.dynamics, implicit Euler)
+  per force in `forces` and per thesis magnitude in `thesis_forces` (scaled by our
+  pull-out force over the thesis' continuous threshold `thesis_reference`), and a
+  bisection for the threshold force (to `tolerance`).
+
+A pull ends at the event "dislodged": both contact zones open, or the peg risen by
+`rise`; the event time is located inside the increment. Impulses: `impulse_Ns` is the
+exact integral of the applied force from the start of the pull to the event;
+`impulse_frames_Ns` the thesis' frame-quantised one, to the first output frame
+(`frame` = 0.005 s) at or after the event.
+
+Each case writes pulls.csv (one row per pull) in its directory; `report` gathers them
+into results/NAME/results.csv and thresholds.csv and draws the plots.
+"""
+import copy
+import csv
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+PULL_STEP, OBSERVE_STEP = 2, 3
+PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
+
+# -- impulses ------------------------------------------------------------------------------
+
+def pull_impulse(schedule, elapsed: float) -> float:
+    """Exact impulse (N*s) of the vertical applied force from the start of the pull over `elapsed` s."""
+    from femcontact.scenarios.dynamics import step_impulse
+
+    total, t = 0.0, elapsed
+    for index in (PULL_STEP, OBSERVE_STEP):
+        duration = schedule.steps[index]["duration"]
+        span = min(t, duration)
+        if span > 0:
+            total += float(step_impulse(schedule, index, 0.0, span)[0][1])
+        t -= span
+    return total
+
+
+def frame_time(elapsed: float, frame: float) -> float:
+    """The first output frame at or after `elapsed` (s since the start of the pull)."""
+    return math.ceil(elapsed / frame - 1e-9) * frame
+
+
+# -- the 1-DOF model -------------------------------------------------------------------------
+
+def wedged_contacts(row: dict, tilt: float) -> dict:
+    """Normal and tangential forces on the peg (N) at A and B from a recorder row's zone
+    resultants (forces of the peg on the blocks). A: block A's mouth corner on the peg's
+    side, normal (cos t, sin t), tangent along the peg axis (-sin t, cos t); B: the tip
+    corner on wall B, normal -x, tangent +y. Tangential forces are positive upwards."""
+    on_peg_A = -np.array([row["contact_A_Fx"], row["contact_A_Fy"]])
+    on_peg_B = -np.array([row["contact_B_Fx"], row["contact_B_Fy"]])
+    n_A, t_A = np.array([math.cos(tilt), math.sin(tilt)]), np.array([-math.sin(tilt), math.cos(tilt)])
+    return {"N_A": float(on_peg_A @ n_A), "T_A": float(on_peg_A @ t_A),
+            "N_B": float(-on_peg_B[0]), "T_B": float(on_peg_B[1])}
+
+
+def one_dof_thresholds(N_A: float, T_A: float, N_B: float, T_B: float, tilt: float, mu: float) -> dict:
+    """A peg that only translates vertically, held by two frictional contacts with the wedged
+    normal forces N and friction preloads T (positive up; they balance: T_A + T_B +
+    N_A sin(tilt) = 0). A pull F adds -F/2 to each friction force (two like tangential
+    springs) until one reaches -mu N: `first_slip` = 2 min_i (T_i + mu N_i). That contact then
+    slides and the other holds until both slide: `full_slide` = mu (N_A + N_B) - N_A sin(tilt)
+    (block A's push on the tilted side has an upward component). A peg free to turn pivots
+    about the contact that still sticks once the first one slides, which unloads the wedge."""
+    return {"first_slip": 2 * min(T_A + mu * N_A, T_B + mu * N_B),
+            "full_slide": mu * (N_A + N_B) - N_A * math.sin(tilt)}
+
+
+# -- one case ----------------------------------------------------------------------------------
+
+class Puller:
+    """The wedged peg of one scene and its pulls, each restarting from the wedged state."""
+
+    def __init__(self, scene: dict, restart=None, checkpoint=None):
+        from femcontact.scenarios.dynamics import DynamicSimulation
+
+        self.scene, self.settings = scene, scene["dislodging"]
+        self.simulation = sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
+        start = time.perf_counter()
+        first = sim.load_checkpoint(restart) if restart else 0
+        for index in range(first, min(PULL_STEP, len(scene["steps"]))):
+            sim.run_step(index, scene["steps"][index])
+        self.wedge_time = time.perf_counter() - start
+        if checkpoint:
+            sim.save_checkpoint(checkpoint)
+        steps = sim.scene["steps"]
+        while len(steps) <= OBSERVE_STEP:  # the wedging prefix alone: pull and observe steps to set later
+            steps.append({**copy.deepcopy(steps[PULL_STEP - 1]), "name": ("pull", "observe")[len(steps) - PULL_STEP]})
+        self.wedged_row = sim.history[-1]
+        self.wedged = sim.snapshot()
+        self.tilt = sim.problem.rigid.tilt()
+        self.contacts = wedged_contacts(self.wedged_row, self.tilt)
+        self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
+        stored = Path(restart or "", PULLOUT_FILE)
+        start = time.perf_counter()
+        self.pullout = json.loads(stored.read_text()) if restart and stored.exists() else self.quasi_static_pullout()
+        self.pullout_time = time.perf_counter() - start
+        if checkpoint and sim.problem.mesh.comm.rank == 0:
+            from femcontact.io import write_json_atomic
+
+            write_json_atomic(Path(checkpoint, PULLOUT_FILE), self.pullout)
+        factor = self.settings["thickness"]
+        rigid = sim.problem.rigid
+        rigid.mass, rigid.mass_matrix = rigid.mass * factor, rigid.mass_matrix * factor
+
+    def _set_pull(self, force: float, method: str, frequency: float) -> None:
+        from femcontact.solver.loading import Schedule
+
+        sim = self.simulation
+        pull = sim.scene["steps"][PULL_STEP]
+        pull["force"] = [0.0, float(force)]
+        pull["moment"] = []
+        pull["load_point"] = "peg_top"
+        if method == "pulse":
+            pull["amplitude"] = "pulse"
+            pull["pulse"] = {"frequency": float(frequency), "duty": 1.0, "shape": "triangle"}
+        else:
+            pull["amplitude"] = "step"
+        observe = sim.scene["steps"][OBSERVE_STEP]
+        observe.update(force=[], moment=[], amplitude="step", load_point="peg_top")
+        sim.schedule = Schedule(sim.scene, sim.problem.rigid, sim.schedule.points)
+
+    def pull(self, force: float, method: str, frequency: float = 0.0) -> dict:
+        """One dynamic pull from the wedged state; its results row."""
+        from femcontact.scenarios.dynamics import Event
+
+        s, sim = self.settings, self.simulation
+        sim.resume(self.wedged)
+        self._set_pull(force, method, frequency)
+        start = time.perf_counter()
+        outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
+                                s["max_rise_per_increment"],
+                                settle_period=1 / frequency if method == "pulse" else 0.01)
+        wall = time.perf_counter() - start
+        start_time = float(sim.schedule.start_times[PULL_STEP])
+        row = {"case": s["case"], "method": method, "pulse_hz": frequency if method == "pulse" else "",
+               "force_N": float(force), "dislodged": outcome.event is not None,
+               "dislodge_time_s": "", "impulse_Ns": "", "impulse_frames_Ns": "", "event": outcome.event or "",
+               "rise_at_end_mm": float(sim.problem.rigid.values[1] - self.wedged["state"]["r"][1]),
+               "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
+               "settled": outcome.settled, "wall_s": wall}
+        if outcome.event:
+            elapsed = outcome.time - start_time
+            row.update(dislodge_time_s=elapsed, impulse_Ns=pull_impulse(sim.schedule, elapsed),
+                       impulse_frames_Ns=pull_impulse(sim.schedule, frame_time(elapsed, s["frame"])))
+        return row
+
+    def threshold(self, method: str, frequency: float, rows: list) -> dict:
+        """Bisection for the smallest peak force that dislodges (every pull appended to rows)."""
+        s = self.settings
+        pullout = self.pullout["quasi_static_pullout_N"]
+        low, high = s["bracket"] or (pullout, 1.05 * pullout)
+        cache = {round(row["force_N"], 6): row for row in rows}  # pulls already run are reused
+
+        def dislodges(force):
+            force = round(force, 6)
+            if force not in cache:
+                row = self.pull(force, method, frequency)
+                row["search"] = True
+                rows.append(row)
+                cache[force] = row
+            return cache[force]["dislodged"]
+
+        width = high - low
+        for _ in range(8):
+            if not dislodges(high):
+                low, high = high, high + width
+            elif dislodges(low):
+                low, high = max(low - width, 0.0), low
+            else:
+                break
+        else:
+            raise RuntimeError(f"no bracket of the threshold found between {low} and {high} N")
+        while high - low > s["tolerance"] * (1 + 1e-9):
+            middle = (low + high) / 2
+            if dislodges(middle):
+                high = middle
+            else:
+                low = middle
+        return {"threshold_force_N": high, "bracket_N": high - low, "low_N": low,
+                "impulse_at_threshold_Ns": cache[round(high, 6)]["impulse_Ns"]}
+
+    def holds(self, force: float) -> bool:
+        """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
+        the exact Newton iteration (no stabilisation) converges from the wedged state to a state
+        with both contact zones loaded and the peg lifted by less than 1e-3 mm (elastic)."""
+        from femcontact.solver.newton import NewtonFailure
+
+        sim, p = self.simulation, self.simulation.problem
+        sim.resume(self.wedged)
+        sim.inertia.active = False
+        self._set_pull(force, "continuous", 0.0)
+        duration = sim.scene["steps"][PULL_STEP]["duration"]
+        load = sim.schedule.load(PULL_STEP, duration, duration)
+        try:
+            sim.solve(load, stabilize=False)
+        except (NewtonFailure, FloatingPointError):
+            return False
+        lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
+        return bool(np.all(sim.zone_forces() > 0) and abs(lift) < 1e-3)
+
+    def quasi_static_pullout(self) -> dict:
+        """The largest pull the wedge holds quasi-statically, by bisection to `tolerance` between
+        0 and 1.5 times the 1-DOF full-slide force (a slow ramp without inertia, each force solved
+        from the wedged state: in stick the response is elastic, hence path-independent)."""
+        tolerance = self.settings["tolerance"]
+        low, high = 0.0, 1.5 * self.one_dof["full_slide"]
+        if self.holds(high):
+            raise RuntimeError(f"the wedge holds {high:.4g} N, 1.5 times the 1-DOF full-slide force")
+        while high - low > tolerance * (1 + 1e-9):
+            middle = (low + high) / 2
+            if self.holds(middle):
+                low = middle
+            else:
+                high = middle
+        return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
+
+
+def pull_columns() -> list[str]:
+    return ["case", "method", "pulse_hz", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
+            "impulse_frames_Ns", "event", "force_over_pullout", "thesis_force_N", "thickness_mm", "rise_at_end_mm",
+            "increments", "newton_iterations", "settled", "search", "wall_s"]
+
+
+def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
+    """One study case: the wedged state (or its checkpoint), then the case's pulls or pull-out."""
+    from mpi4py import MPI
+
+    case_dir = Path(case_dir)
+    s = scene["dislodging"]
+    start = time.perf_counter()
+    puller = Puller(scene, restart, case_dir / "checkpoint" if checkpoint else None)
+    sim = puller.simulation
+    metrics = {"residual_force_A": float(np.hypot(puller.wedged_row["contact_A_Fx"], puller.wedged_row["contact_A_Fy"])),
+               **{f"wedged_{k}": v for k, v in puller.contacts.items()}, "tilt_deg": math.degrees(puller.tilt),
+               "one_dof_first_slip_N": puller.one_dof["first_slip"], "one_dof_full_slide_N": puller.one_dof["full_slide"],
+               "peg_mass_t": float(sim.problem.rigid.mass), "wedge_time_s": puller.wedge_time,
+               **puller.pullout, "pullout_time_s": puller.pullout_time}
+    info = {"dofs": sim.dofs, "effects": list(scene["effects"]), "built": sim.problem.built,
+            "newton_iterations": int(sum(row["newton_iterations"] for row in sim.history))}
+    if len(scene["steps"]) <= PULL_STEP:
+        return {"metrics": metrics, "timings": {"wedge": puller.wedge_time}, "info": info}
+    rows, method = [], s["method"]
+    frequency = s["pulse_hz"] if method == "pulse" else 0.0
+    scale = puller.pullout["quasi_static_pullout_N"] / s["thesis_reference"]
+    for force, thesis in [(f, "") for f in s["forces"]] + [(round(f * scale, 6), f) for f in s["thesis_forces"]]:
+        rows.append({**puller.pull(force, method, frequency), "search": False, "thesis_force_N": thesis})
+    if s["search"]:
+        metrics.update(puller.threshold(method, frequency, rows))
+    for row in rows:
+        row.update(force_over_pullout=row["force_N"] / puller.pullout["quasi_static_pullout_N"],
+                   thickness_mm=s["thickness"])
+    if MPI.COMM_WORLD.rank == 0:
+        with open(case_dir / "pulls.csv", "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fieldnames=pull_columns(), extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(rows)
+    walls = [row["wall_s"] for row in rows]
+    metrics.update(pulls=len(rows), pull_wall_mean_s=float(np.mean(walls)) if walls else 0.0,
+                   pull_wall_max_s=float(np.max(walls)) if walls else 0.0)
+    return {"metrics": metrics, "timings": {"wedge": puller.wedge_time, "total_case": time.perf_counter() - start},
+            "info": info}
+
+
+# -- the study's tables and plots ----------------------------------------------------------------
+
+THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowest dislodged) in N,
+    # from tests/data/dislodging_thesis.csv (thesis ch. 4); None: every sampled force dislodged
+    (1, "continuous", 0.0): (None, 20.2), (1, "pulse", 10.0): (20.28, 20.29), (1, "pulse", 20.0): (20.22, 20.23),
+    (1, "pulse", 30.0): (20.2, 20.21), (1, "pulse", 40.0): (None, 20.2), (1, "pulse", 50.0): (None, 20.2),
+    (2, "continuous", 0.0): (None, 22.5), (2, "pulse", 10.0): (22.66, 22.67), (2, "pulse", 20.0): (22.6, 22.61),
+    (2, "pulse", 30.0): (22.57, 22.58), (2, "pulse", 40.0): (22.55, 22.56), (2, "pulse", 50.0): (22.5, 22.55),
+}
+THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "thickness_mm", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
+                     "impulse_at_threshold_Ns", "threshold_over_pullout", "one_dof_first_slip_N",
+                     "one_dof_full_slide_N", "thesis_threshold_N", "thesis_over_thesis_continuous"]
+
+
+def _read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as stream:
+        return list(csv.DictReader(line for line in stream if not line.startswith("#")))
+
+
+def _number(value):
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
+def gather(study) -> tuple[list[dict], list[dict]]:
+    """The study's pull rows and threshold rows (from the ok case directories)."""
+    from femcontact.study.runner import read_result
+
+    pulls, thresholds = [], []
+    for case in study.cases:
+        result = read_result(case.dir)
+        if not result or result["status"] != "ok":
+            continue
+        s, metrics = case.scene["dislodging"], result["metrics"]
+        if (case.dir / "pulls.csv").exists():
+            pulls += _read_csv(case.dir / "pulls.csv")
+        if "threshold_force_N" in metrics:
+            hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
+            pullout = metrics["quasi_static_pullout_N"]
+            thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "",
+                               "thickness_mm": s["thickness"], "quasi_static_pullout_N": pullout,
+                               "one_dof_first_slip_N": metrics["one_dof_first_slip_N"],
+                               "one_dof_full_slide_N": metrics["one_dof_full_slide_N"],
+                               "threshold_over_pullout": metrics["threshold_force_N"] / pullout,
+                               **{k: metrics[k] for k in ("threshold_force_N", "bracket_N", "impulse_at_threshold_Ns")}})
+    for row in thresholds:
+        hz = _number(row["pulse_hz"]) or 0.0
+        thesis = THESIS_THRESHOLDS.get((row["case"], row["method"], hz), (None, None))[1]
+        reference = THESIS_THRESHOLDS.get((row["case"], "continuous", 0.0), (None, None))[1]
+        row["thesis_threshold_N"] = thesis if thesis is not None else ""
+        row["thesis_over_thesis_continuous"] = thesis / reference if thesis and reference else ""
+    key = lambda r: (int(r["case"]), r["method"], _number(r["pulse_hz"]) or 0.0, _number(r.get("force_N")) or 0.0)
+    return sorted(pulls, key=key), sorted(thresholds, key=key)
+
+
+def report(study) -> list[Path]:
+    """results/NAME/results.csv (one row per pull; replaces the runner's per-case export, which
+    stays in results.sqlite), thresholds.csv and the plots; returns the plot paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pulls, thresholds = gather(study)
+    out = study.results
+    for name, rows, columns in (("results.csv", pulls, pull_columns()), ("thresholds.csv", thresholds, THRESHOLD_COLUMNS)):
+        with open(out / name, "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fieldnames=columns, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(rows)
+    # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
+    thesis_path = Path(__file__).resolve().parent.parent / "tests" / "data" / "dislodging_thesis.csv"
+    thesis = _read_csv(thesis_path) if thesis_path.exists() else []
+    paths = []
+    for case in sorted({int(r["case"]) for r in pulls}):
+        reference = THESIS_THRESHOLDS[(case, "continuous", 0.0)][1]
+        for quantity, label in (("impulse_Ns", "impulse to dislodge (N s)"), ("dislodge_time_s", "time to dislodge (s)")):
+            fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+            mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
+            for series in sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) for r in mine}):
+                rows = [r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) == series]
+                rows.sort(key=lambda r: float(r["force_N"]))
+                name = ("continuous" if series[0] == "continuous" else f"{series[1]:g} Hz") + \
+                    (f", {series[2]:g} mm" if series[2] != 1.0 else "")
+                x = [float(r["force_over_pullout"]) for r in rows]
+                frames = "impulse_frames_Ns" if quantity == "impulse_Ns" else None
+                axes[0].plot(x, [float(r[quantity]) for r in rows], "o", ms=3, label=f"model {name}")
+                axes[1].plot(x, [float(r[frames]) if frames else math.ceil(float(r[quantity]) / 0.005 - 1e-9) * 0.005
+                                 for r in rows], "o", ms=3, label=f"model {name}")
+                if thesis and series[2] == 1.0:
+                    method = "continuous" if series[0] == "continuous" else "pulsed"
+                    hz = "" if series[0] == "continuous" else f"{series[1]:g}"
+                    trows = [r for r in thesis if int(r["case"]) == case and r["method"] == method
+                             and r["pulse_hz"] == hz and r["dislodge_frame"]]
+                    value = (lambda r: _number(r["impulse_Ns"])) if frames else (lambda r: int(r["dislodge_frame"]) * 0.005)
+                    points = [(float(r["force_N"]) / reference, value(r)) for r in trows if value(r) is not None]
+                    if points:
+                        axes[1].plot(*zip(*points), "x", ms=4, label=f"thesis {name}")
+            axes[0].set_title(f"case {case}: exact (event located inside the increment)")
+            axes[1].set_title(f"case {case}: quantised to 0.005 s frames; thesis x = F / {reference:g} N")
+            for ax in axes:
+                ax.set_xlabel("peak pull force / quasi-static pull-out force")
+                ax.grid(True, alpha=0.3)
+                ax.set_yscale("log")
+            axes[0].set_ylabel(label)
+            axes[1].legend(fontsize=6, ncol=2)
+            fig.tight_layout()
+            path = out / f"case{case}_{quantity.split('_')[0]}_vs_force.png"
+            fig.savefig(path, dpi=110)
+            plt.close(fig)
+            paths.append(path)
+    if thresholds:
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+        for case in sorted({r["case"] for r in thresholds}):
+            rows = [r for r in thresholds if r["case"] == case and r["method"] == "pulse" and r["thickness_mm"] == 1.0]
+            rows.sort(key=lambda r: float(r["pulse_hz"]))
+            hz = [float(r["pulse_hz"]) for r in rows]
+            continuous = [r for r in thresholds if r["case"] == case and r["method"] == "continuous"
+                          and r["thickness_mm"] == 1.0]
+            axes[0].plot(hz, [r["threshold_force_N"] for r in rows], "o-", label=f"model case {case}")
+            axes[0].plot(hz, [r["thesis_threshold_N"] or np.nan for r in rows], "x--", label=f"thesis case {case}")
+            if continuous:
+                axes[0].axhline(continuous[0]["threshold_force_N"], ls=":", color="k", lw=0.8)
+            axes[1].plot(hz, [r["threshold_over_pullout"] or np.nan for r in rows], "o-",
+                         label=f"model case {case} / quasi-static pull-out")
+            axes[1].plot(hz, [r["thesis_over_thesis_continuous"] or np.nan for r in rows], "x--",
+                         label=f"thesis case {case} / its continuous threshold")
+        axes[0].set_ylabel("threshold peak force (N)")
+        axes[1].set_ylabel("normalised threshold")
+        for ax in axes:
+            ax.set_xlabel("pulse frequency (Hz)")
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.tight_layout()
+        path = out / "threshold_vs_frequency.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
