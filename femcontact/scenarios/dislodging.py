@@ -360,16 +360,18 @@ def report(study) -> list[Path]:
         for quantity, label in (("impulse_Ns", "impulse to dislodge (N s)"), ("dislodge_time_s", "time to dislodge (s)")):
             fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
             mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
-            for series in sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) for r in mine}):
+            for k, series in enumerate(sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"]))
+                                               for r in mine})):
+                colour = f"C{k}"
                 rows = [r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) == series]
                 rows.sort(key=lambda r: float(r["force_N"]))
                 name = ("continuous" if series[0] == "continuous" else f"{series[1]:g} Hz") + \
                     (f", {series[2]:g} mm" if series[2] != 1.0 else "")
                 x = [float(r["force_over_pullout"]) for r in rows]
                 frames = "impulse_frames_Ns" if quantity == "impulse_Ns" else None
-                axes[0].plot(x, [float(r[quantity]) for r in rows], "o", ms=3, label=f"model {name}")
+                axes[0].plot(x, [float(r[quantity]) for r in rows], "o-", ms=3, lw=0.6, color=colour, label=f"model {name}")
                 axes[1].plot(x, [float(r[frames]) if frames else math.ceil(float(r[quantity]) / 0.005 - 1e-9) * 0.005
-                                 for r in rows], "o", ms=3, label=f"model {name}")
+                                 for r in rows], "o-", ms=3, lw=0.6, color=colour, label=f"model {name}")
                 if thesis and series[2] == 1.0:
                     method = "continuous" if series[0] == "continuous" else "pulsed"
                     hz = "" if series[0] == "continuous" else f"{series[1]:g}"
@@ -378,14 +380,16 @@ def report(study) -> list[Path]:
                     value = (lambda r: _number(r["impulse_Ns"])) if frames else (lambda r: int(r["dislodge_frame"]) * 0.005)
                     points = [(float(r["force_N"]) / reference, value(r)) for r in trows if value(r) is not None]
                     if points:
-                        axes[1].plot(*zip(*points), "x", ms=4, label=f"thesis {name}")
+                        axes[1].plot(*zip(*points), "x--", ms=4, lw=0.6, color=colour, label=f"thesis {name}")
             axes[0].set_title(f"case {case}: exact (event located inside the increment)")
             axes[1].set_title(f"case {case}: quantised to 0.005 s frames; thesis x = F / {reference:g} N")
-            for ax in axes:
+            for ax in axes:  # near the threshold; pulls at the thesis' absolute magnitudes are in results.csv
                 ax.set_xlabel("peak pull force / quasi-static pull-out force")
+                ax.set_xlim(0.995, 1.16)
                 ax.grid(True, alpha=0.3)
                 ax.set_yscale("log")
             axes[0].set_ylabel(label)
+            axes[0].legend(fontsize=6, ncol=2)
             axes[1].legend(fontsize=6, ncol=2)
             fig.tight_layout()
             path = out / f"case{case}_{quantity.split('_')[0]}_vs_force.png"
