@@ -110,7 +110,11 @@ class Puller:
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
-        self.pullout = json.loads(stored.read_text()) if restart and stored.exists() else self.quasi_static_pullout()
+        if restart and stored.is_file():
+            self.pullout = json.loads(stored.read_text())
+        else:
+            held = self.quasi_static_pullout(rotation_held=True)
+            self.pullout = {**self.quasi_static_pullout(), **{f"{k}_rotation_held": v for k, v in held.items()}}
         self.pullout_time = time.perf_counter() - start
         if checkpoint and sim.problem.mesh.comm.rank == 0:
             from femcontact.io import write_json_atomic
@@ -209,6 +213,7 @@ class Puller:
         self._set_pull(force, "continuous", 0.0)
         duration = sim.scene["steps"][PULL_STEP]["duration"]
         load = sim.schedule.load(PULL_STEP, duration, duration)
+        load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
         try:
             sim.solve(load, stabilize=False)
         except (NewtonFailure, FloatingPointError):
@@ -216,20 +221,31 @@ class Puller:
         lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
         return bool(np.all(sim.zone_forces() > 0) and abs(lift) < 1e-3)
 
-    def quasi_static_pullout(self) -> dict:
+    def quasi_static_pullout(self, rotation_held: bool = False) -> dict:
         """The largest pull the wedge holds quasi-statically, by bisection to `tolerance` between
         0 and 1.5 times the 1-DOF full-slide force (a slow ramp without inertia, each force solved
-        from the wedged state: in stick the response is elastic, hence path-independent)."""
-        tolerance = self.settings["tolerance"]
-        low, high = 0.0, 1.5 * self.one_dof["full_slide"]
-        if self.holds(high):
-            raise RuntimeError(f"the wedge holds {high:.4g} N, 1.5 times the 1-DOF full-slide force")
-        while high - low > tolerance * (1 + 1e-9):
-            middle = (low + high) / 2
-            if self.holds(middle):
-                low = middle
-            else:
-                high = middle
+        from the wedged state: in stick the response is elastic, hence path-independent).
+        `rotation_held`: the peg's rotation is held at its wedged angle (a pull that also
+        restrains the rotation, for comparison with the 1-DOF full-slide force)."""
+        sim = self.simulation
+        modes = list(sim.problem.rigid.modes)
+        if rotation_held:
+            sim.problem.rigid.modes[2] = "held"
+            sim.held = self.wedged["state"]["r"].copy()
+        try:
+            tolerance = self.settings["tolerance"]
+            low, high = 0.0, 1.5 * self.one_dof["full_slide"]
+            if self.holds(high):
+                raise RuntimeError(f"the wedge holds {high:.4g} N, 1.5 times the 1-DOF full-slide force")
+            while high - low > tolerance * (1 + 1e-9):
+                middle = (low + high) / 2
+                if self.holds(middle):
+                    low = middle
+                else:
+                    high = middle
+        finally:
+            sim.problem.rigid.modes[:] = modes
+            sim.held = None
         return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
 
 
@@ -290,7 +306,8 @@ THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowes
 }
 THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "thickness_mm", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
                      "impulse_at_threshold_Ns", "threshold_over_pullout", "one_dof_first_slip_N",
-                     "one_dof_full_slide_N", "thesis_threshold_N", "thesis_over_thesis_continuous"]
+                     "one_dof_full_slide_N", "quasi_static_pullout_N_rotation_held", "thesis_threshold_N",
+                     "thesis_over_thesis_continuous"]
 
 
 def _read_csv(path: Path) -> list[dict]:
@@ -322,6 +339,7 @@ def gather(study) -> tuple[list[dict], list[dict]]:
             pullout = metrics["quasi_static_pullout_N"]
             thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "",
                                "thickness_mm": s["thickness"], "quasi_static_pullout_N": pullout,
+                               "quasi_static_pullout_N_rotation_held": metrics.get("quasi_static_pullout_N_rotation_held", ""),
                                "one_dof_first_slip_N": metrics["one_dof_first_slip_N"],
                                "one_dof_full_slide_N": metrics["one_dof_full_slide_N"],
                                "threshold_over_pullout": metrics["threshold_force_N"] / pullout,
@@ -360,10 +378,10 @@ def report(study) -> list[Path]:
         for quantity, label in (("impulse_Ns", "impulse to dislodge (N s)"), ("dislodge_time_s", "time to dislodge (s)")):
             fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
             mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
-            for k, series in enumerate(sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"]))
-                                               for r in mine})):
+            key = lambda r: (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"]))
+            for k, series in enumerate(sorted({key(r) for r in mine})):
                 colour = f"C{k}"
-                rows = [r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"])) == series]
+                rows = [r for r in mine if key(r) == series]
                 rows.sort(key=lambda r: float(r["force_N"]))
                 name = ("continuous" if series[0] == "continuous" else f"{series[1]:g} Hz") + \
                     (f", {series[2]:g} mm" if series[2] != 1.0 else "")

@@ -141,6 +141,7 @@ class DynamicSimulation(Simulation):
                              "deformable body quasi-static; set it false")
         super().__init__(scene, comm or MPI.COMM_WORLD)
         self.newton.__class__ = DynamicNewton  # the same solver, with the uncapped dynamic rigid step
+        self.held = None  # pose (mm, rad) at which dofs that are not free are held, instead of steps.motion
         self.inertia = inertia_of(self.problem)
         if self.inertia is not None:
             self.inertia.scheme, self.inertia.active = "euler", False
@@ -166,6 +167,8 @@ class DynamicSimulation(Simulation):
         (unless `stabilize` is false)."""
         p = self.problem
         state = p.state()
+        if self.held is not None:
+            load.motion = self.held.copy()
         p.begin_increment(load)
         self._prescribe(load)
         dynamic = self.inertia is not None and self.inertia.active
