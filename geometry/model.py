@@ -65,7 +65,7 @@ def rigid_body(scene: dict) -> dict:
         return {"shape": "rectangle" if dim == 2 else "cylinder", **size, "length": peg["length"],
                 "corner_radius": peg["corner_radius"], "chamfer_width": peg["chamfer_width"],
                 "chamfer_angle": peg["chamfer_angle"], "origin": pose.origin, "rotation": pose.rotation,
-                "tilt": pose.tilt}
+                "tilt": pose.tilt, "tip_contact": peg.get("tip_contact", True)}
     hole = scene["hole"]
     return {**identity, "shape": "hole", "half_width": hole["width"] / 2, "depth": hole["depth"],
             "block_width": hole["block_width"], "kind": hole["kind"],

@@ -14,7 +14,7 @@ from pathlib import Path
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 
-EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress")
+EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support")
 RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
 
 
@@ -35,11 +35,16 @@ PEG = {
     "placement": Field("str", "two_point", "'two_point': tilt theta(l_d) touching both walls (less `gap`); "
                        "'centred': axis through the hole centre at `tilt`", choices=("two_point", "centred")),
     "tilt": Field("float", 0.0, "tilt (deg, counter-clockwise) for placement 'centred'", min=-89.0, max=89.0),
+    "offset": Field("float", 0.0, "lateral offset (mm, along x) of the tip centre from the hole axis, "
+                    "placement 'centred' (Whitney's lateral error)"),
     "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
                  min=0.0),
     "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
     "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
     "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
+    "tip_contact": Field("bool", True, "false: the rigid peg's end faces take no contact from inside, a node "
+                         "inside the peg is pushed out through its side (an entering peg: a wall node passed by "
+                         "the tip corner cannot snag under the tip face); keep true if the peg can land on its tip"),
 }
 
 HOLE = {
@@ -103,6 +108,29 @@ STEP = {
     },
     "motion": {name: Field("float", 0.0, "prescribed rigid-body displacement (mm) or rotation (rad) at the "
                            "end of the step, for dofs set 'prescribed'") for name in RIGID_DOFS[3]},
+    "support_motion": {name: Field("float", 0.0, "with 'compliant_support': the gripper's displacement (mm) or "
+                                   "rotation (rad) at the end of the step, from its start") for name in RIGID_DOFS[3]},
+}
+
+SUPPORT = {
+    "model": Field("str", "springs", "'springs' (kx, kz, ktheta, ktorsion), 'matrix' (`stiffness`) or 'rcc' "
+                   "(the RCC design formula, `rcc`)", choices=("springs", "matrix", "rcc")),
+    "compliance_centre": Field("float", 0.0, "L_g: compliance centre above the peg tip, on its axis (mm)"),
+    "kx": Field("float", 10.0, "lateral stiffness (N/mm; 3-D: x and y)", positive=True),
+    "kz": Field("float", 1e5, "axial stiffness along the hole axis (N/mm)", positive=True),
+    "ktheta": Field("float", 5e4, "angular stiffness about the out-of-plane axis (2-D), about x and y "
+                    "(3-D) (N*mm/rad)", positive=True),
+    "ktorsion": Field("float", 5e4, "torsional stiffness about the hole axis, 3-D (N*mm/rad)", positive=True),
+    "stiffness": Field("floats", [], "model 'matrix': K row by row, 3x3 (x, y, rz) in 2-D, 6x6 (x, y, z, rx, "
+                       "ry, rz) in 3-D (N/mm, N, N*mm/rad), global frame"),
+    "rcc": {
+        "b": Field("float", 50.0, "RCC base length b (mm)", positive=True),
+        "peg_length": Field("float", 50.0, "RCC design peg length L (mm): places its centre at the design tip",
+                            min=0.0),
+        "theta_l": Field("float", 70.0, "RCC link tilt theta_L (deg)",
+                         check=lambda v: None if 0.0 < v < 90.0 else "must lie in (0, 90)"),
+        "k": Field("float", 200.0, "RCC link stiffness (N/mm)", positive=True),
+    },
 }
 
 SOLVER = {
@@ -156,7 +184,7 @@ def contact_schema(dim: int, geometry: str) -> dict:
         hole = dict(HOLE)
         if dim == 3:
             hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
-        schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
+        schema.update(peg=PEG, hole=hole, support=SUPPORT, materials={"peg": _material(), "hole": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
     return schema
@@ -178,6 +206,16 @@ def _check_contact(scene: dict) -> None:
         for name, value in step["motion"].items():
             if value and scene["rigid_body"]["dofs"].get(name) != "prescribed":
                 problems.append(f"steps[{i}].motion.{name} = {value}: rigid_body.dofs.{name} is not 'prescribed'")
+        for name, value in step["support_motion"].items():
+            if value and "compliant_support" not in effects:
+                problems.append(f"steps[{i}].support_motion.{name} = {value}: needs the 'compliant_support' effect")
+            elif value and name not in RIGID_DOFS[dim]:
+                problems.append(f"steps[{i}].support_motion.{name} = {value}: not a {dim}-D dof "
+                                f"({', '.join(RIGID_DOFS[dim])})")
+        if step["amplitude"] == "pulse" and any(step["support_motion"].values()):
+            problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
+    if "compliant_support" in effects and scene.get("rigid") != "peg":
+        problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg, set rigid = 'peg'")
     if problems:
         raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
     if scene["geometry"] == "peg_in_hole":

@@ -12,17 +12,19 @@ import ufl
 from femcontact.errors import InputError
 
 
-def _box(q, radius, tiny):
+def _box(q, radius, tiny, sides_only=False):
     """Signed distance to a box given q = |xi| - half_sizes (rounded by `radius`).
 
     Written with an explicit inside/outside branch so that a point exactly on a face
     (q_i = 0) gets that face's normal as gradient; the outside part is regularised by
-    `tiny` (mm) so its derivative stays finite on the edges of the branch."""
+    `tiny` (mm) so its derivative stays finite on the edges of the branch. `sides_only`:
+    a point inside is pushed out through the side (q[0]) whatever the nearer face, so
+    the end faces take no contact from inside (a peg's tip face, see `tip_contact`)."""
     outside = ufl.sqrt(sum(ufl.max_value(qi, 0) ** 2 for qi in q) + tiny ** 2) - tiny
     inside = q[0]
     is_outside = ufl.gt(q[0], 0)
     for qi in q[1:]:
-        inside = ufl.max_value(inside, qi)
+        inside = inside if sides_only else ufl.max_value(inside, qi)
         is_outside = ufl.Or(is_outside, ufl.gt(qi, 0))
     return ufl.conditional(is_outside, outside, inside) - radius
 
@@ -45,11 +47,12 @@ def signed_distance(rigid: dict, xi):
     if shape == "rectangle":
         r = rigid["corner_radius"]
         q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]
-        return _box(q, r, tiny)
+        return _box(q, r, tiny, not rigid.get("tip_contact", True))
     if shape == "cylinder":
         r = rigid["corner_radius"]
         rho = ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
-        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny)
+        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny,
+                    not rigid.get("tip_contact", True))
     if shape == "disc":
         return ufl.sqrt(ufl.dot(xi, xi)) - rigid["radius"]
     if shape == "cylinder_y":

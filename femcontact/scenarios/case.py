@@ -11,7 +11,12 @@ from femcontact.errors import InputError
 
 
 def family_metrics(simulation) -> dict:
-    """The study family's metrics of a finished contact simulation (none for a plain block)."""
+    """The study family's metrics of a finished contact simulation (none for a plain block):
+    a peg on a compliant support is an insertion, any other peg in a hole a wedging case."""
+    if "compliant_support" in simulation.scene["effects"]:
+        from femcontact.scenarios.insertion import insertion_metrics
+
+        return insertion_metrics(simulation)
     if simulation.scene["geometry"] == "peg_in_hole":
         from femcontact.scenarios.wedging import wedge_metrics
 

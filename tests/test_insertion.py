@@ -1,0 +1,104 @@
+"""The compliant support (effects/compliant_support.py) against hand calculations, and the
+insertion metrics (scenarios/insertion.py).
+
+The peg hangs in a wide hole (D = 14, d = 10, centred, no contact), so the support alone holds it: a load W at the
+compliance centre C displaces C by K^-1 W exactly; a force at the peg top turns the peg about C,
+a one-unknown equilibrium solved here by bisection; a gripper motion carries the peg along
+rigidly. Meshes are coarse: the hole is never touched.
+"""
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from femcontact.config.scene import load_scene
+from femcontact.errors import InputError
+from femcontact.solver.stepping import Simulation
+
+SCENE = "scenes/insertion_2d.toml"
+FREE = ["hole.width=14.0", "peg.offset=0.0", "peg.insertion_depth=2.0", "steps.0.increments=1", "mesh.contact_size=1.0", "mesh.size_max=3.0",
+        "mesh.contact_zone=1.0", "solver.rtol=1e-12", "solver.atol=1e-9",
+        "steps.0.support_motion.y=0.0"]
+
+
+def run(*overrides):
+    from pathlib import Path
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, FREE + list(overrides))
+    simulation = Simulation(scene, comm=MPI.COMM_WORLD)
+    simulation.run()
+    return simulation, simulation.history[-1]
+
+
+def test_load_at_the_compliance_centre_gives_K_inverse_W():
+    """A coupled, symmetric K (model 'matrix'); C at the reference point (L_g = length/2 = 10), so
+    the load's arm vanishes: q = K^-1 W, tip = C + q_t + R(q_rz)(tip0 - C0)."""
+    K = np.array([[20.0, 5.0, 40.0], [5.0, 300.0, -30.0], [40.0, -30.0, 3000.0]])
+    W = np.array([1.5, -2.0, 30.0])
+    sim, row = run("support.model='matrix'", f"support.stiffness={K.reshape(-1).tolist()}",
+                   "support.compliance_centre=10.0", f"steps.0.force={W[:2].tolist()}",
+                   f"steps.0.moment=[{W[2]}]", "steps.0.load_point='reference'")
+    q = np.linalg.solve(K, W)
+    assert [row["support_qx"], row["support_qy"], row["support_qrz"]] == pytest.approx(q, rel=1e-7)
+    assert [row["support_Fx"], row["support_Fy"], row["support_Mz"]] == pytest.approx(-W, rel=1e-7)
+    tip0 = np.array([0.0, -2.0])
+    centre0 = tip0 + [0.0, 10.0]
+    c, s = math.cos(q[2]), math.sin(q[2])
+    tip = centre0 + q[:2] + np.array([[c, -s], [s, c]]) @ (tip0 - centre0)
+    assert [row["tip_x"], row["tip_y"]] == pytest.approx(tip, abs=1e-9)
+
+
+def test_force_at_the_peg_top_turns_the_peg_about_the_compliance_centre():
+    """Diagonal springs, C at the tip (L_g = 0), Fx at the top (20 mm up the axis): the moment
+    about C is -20 cos(theta) Fx, so theta solves K_theta theta = -20 cos(theta) Fx (exact
+    rotation, solved by bisection), C moves Fx / K_x, and the support moment balances it."""
+    kx, ktheta, Fx = 20.0, 300.0, 4.0
+    sim, row = run(f"support.kx={kx}", f"support.ktheta={ktheta}", "support.compliance_centre=0.0",
+                   f"steps.0.force=[{Fx}, 0.0]", "steps.0.load_point='peg_top'")
+    lo, hi = -1.0, 0.0
+    for _ in range(200):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if ktheta * mid + 20 * math.cos(mid) * Fx < 0 else (lo, mid)
+    theta = (lo + hi) / 2
+    assert row["support_qrz"] == pytest.approx(theta, rel=1e-8)
+    assert row["support_qx"] == pytest.approx(Fx / kx, rel=1e-8)
+    assert row["support_Mz"] == pytest.approx(20 * math.cos(theta) * Fx, rel=1e-8)
+    assert row["tilt_deg"] == pytest.approx(math.degrees(theta), rel=1e-8)
+
+
+def test_gripper_motion_carries_the_unloaded_peg_rigidly():
+    """No load: the peg follows the gripper, turned by rz about C (L_g = 10) and shifted."""
+    g = np.array([0.3, -0.2, 0.02])
+    sim, row = run("support.compliance_centre=10.0",
+                   f"steps.0.support_motion={{x={g[0]}, y={g[1]}, rz={g[2]}}}")
+    assert abs(row["support_qx"]) + abs(row["support_qy"]) + abs(row["support_qrz"]) < 1e-9
+    tip0 = np.array([0.0, -2.0])
+    centre0 = tip0 + [0.0, 10.0]
+    c, s = math.cos(g[2]), math.sin(g[2])
+    tip = centre0 + g[:2] + np.array([[c, -s], [s, c]]) @ (tip0 - centre0)
+    assert [row["tip_x"], row["tip_y"]] == pytest.approx(tip, abs=1e-9)
+    assert row["gripper_y"] == pytest.approx(g[1])
+
+
+def test_support_motion_needs_the_effect():
+    with pytest.raises(InputError, match=r"steps\[0\]\.support_motion\.y = -5.2: needs the 'compliant_support'"):
+        load_scene("scenes/insertion_2d.toml", ["effects=['friction', 'plane_strain']"])
+
+
+def test_a_bad_stiffness_matrix_is_refused_naming_the_key():
+    from femcontact.effects.compliant_support import stiffness_matrix
+
+    scene = load_scene("scenes/insertion_2d.toml", ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"])
+    with pytest.raises(InputError, match="support.stiffness: 2 values, expected 9"):
+        stiffness_matrix(scene)
+
+
+def test_rcc_support_reduces_to_the_x_z_plane():
+    """The RCC design formula (reference §3) in 2-D: K_x = 3 k cos^2, K_z = 6 k sin^2, K_theta = k b^2 sin^2."""
+    from femcontact.effects.compliant_support import stiffness_matrix
+
+    scene = load_scene("scenes/insertion_2d.toml", ["support.model='rcc'", "support.rcc={b=50.0, "
+                       "peg_length=50.0, theta_l=70.0, k=200.0}"])
+    c2, s2 = math.cos(math.radians(70)) ** 2, math.sin(math.radians(70)) ** 2
+    assert np.diag(stiffness_matrix(scene)) == pytest.approx([600 * c2, 1200 * s2, 200 * 2500 * s2], rel=1e-12)
