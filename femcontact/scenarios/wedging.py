@@ -45,7 +45,9 @@ BOUNDARY_BAND = 0.05      # |l_d - bound| / l_max below which a case counts as "
 
 
 def _vector(row: dict, prefix: str, dim: int) -> np.ndarray:
-    return np.array([row.get(f"{prefix}_{axis}", np.nan) for axis in "xyz"[:dim]])
+    """A vector of a history row; nan for components the row leaves empty (None)."""
+    values = [row.get(f"{prefix}_{axis}") for axis in "xyz"[:dim]]
+    return np.array([np.nan if value is None else value for value in values], dtype=float)
 
 
 def _loaded(row: dict, dim: int) -> bool:
@@ -110,8 +112,7 @@ def wedge_metrics(simulation) -> dict:
     out["angle_A_deg"], out["angle_B_deg"] = angles
     out["elastic_energy"] = final["elastic_energy"]
     out["max_von_mises"] = max(row["max_von_mises"] for row in history)
-    out["yield_ratio"] = out["max_von_mises"] / scene["materials"]["hole" if scene["rigid"] == "peg" else "peg"][
-        "yield_stress"]
+    out["yield_ratio"] = out["max_von_mises"] / scene["materials"][simulation.problem.deformable]["yield_stress"]
     scale = load_scale(scene, history)
     out["load_scale"] = scale
     out["residual_over_load"] = out["residual_force_A"] / scale if scale > 0 else math.inf
