@@ -10,7 +10,7 @@ STAMPS := .stamps
 SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 RANKS ?= 2
 
-APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py \
+APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
 	python3-meshio python3-pytest python3-venv python3-pip python3-matplotlib \
 	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6
 PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(basename $(notdir $(STUDY_FILES)))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench stability clean $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -93,6 +93,10 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+
+# What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
+accuracy: setup
+	$(PY) -m femcontact.scenarios.accuracy --with-3d
 
 # Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
 stability: setup
