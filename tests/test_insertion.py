@@ -102,3 +102,29 @@ def test_rcc_support_reduces_to_the_x_z_plane():
                        "peg_length=50.0, theta_l=70.0, k=200.0}"])
     c2, s2 = math.cos(math.radians(70)) ** 2, math.sin(math.radians(70)) ** 2
     assert np.diag(stiffness_matrix(scene)) == pytest.approx([600 * c2, 1200 * s2, 200 * 2500 * s2], rel=1e-12)
+
+
+def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
+    """Steel hole, support K_x 20 N/mm, K_theta 3000 N*mm/rad, L_g 10, eps0 0.6, mu 0.1 (the scene),
+    0.1 mm increments, a coarse hole mesh (0.5 mm at the walls). The analytic tier is the rigid-hole
+    quasi-static solution (references/whitney.py). Measured on this mesh: Fz within 0.2 % (chamfer),
+    0.05 % (one point), 1.5 % (two point: the steel blocks' own compliance, which the rigid theory
+    lacks, lowers the force); tolerances 1 %, 1 %, 3 %. The onset is located within one increment."""
+    from pathlib import Path
+
+    from femcontact.scenarios.insertion import insertion_metrics
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE,
+                       ["mesh.contact_size=0.5", "mesh.size_max=3.0", "steps.0.increments=52",
+                        "steps.0.support_motion.y=-5.2"])
+    simulation = Simulation(scene, comm=MPI.COMM_WORLD)
+    simulation.run()
+    m = insertion_metrics(simulation)
+    assert m["analytic"] and not m["analytic_jams"] and not m["jammed"] and not m["wedged"]
+    assert m["fz_error_chamfer"] < 0.01 and m["fx_error_chamfer"] < 0.01
+    assert m["fz_error_one_point"] < 0.01 and m["fx_error_one_point"] < 0.01
+    assert m["fz_error_two_point"] < 0.03 and m["fx_error_two_point"] < 0.01
+    assert m["phase_agreement"] >= 0.95
+    assert abs(m["two_point_onset"] - m["analytic_two_point_onset"]) < 0.1
+    assert m["peak_force"] == pytest.approx(m["analytic_peak_force"], rel=0.03)
+    assert abs(m["peak_depth"] - m["analytic_peak_depth"]) < 0.3

@@ -109,6 +109,11 @@ STEP = {
     },
     "motion": {name: Field("float", 0.0, "prescribed rigid-body displacement (mm) or rotation (rad) at the "
                            "end of the step, for dofs set 'prescribed'") for name in RIGID_DOFS[3]},
+    "stop": {
+        "column": Field("str", "", "end the run when this history column (e.g. support_Fy) exceeds `value` in "
+                        "magnitude after an increment of this step; '' = never"),
+        "value": Field("float", 0.0, "threshold of `column` (its units)", min=0.0),
+    },
     "support_motion": {name: Field("float", 0.0, "with 'compliant_support': the gripper's displacement (mm) or "
                                    "rotation (rad) at the end of the step, from its start") for name in RIGID_DOFS[3]},
 }

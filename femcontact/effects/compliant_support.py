@@ -110,7 +110,8 @@ class CompliantSupport(Effect):
         return -np.r_[force, about_reference]
 
     def rigid_residual(self, load) -> np.ndarray:
-        self.motion = self._gripper(load)
+        """The support's terms for the pose; without a load (None) the gripper is at its start."""
+        self.motion = self._gripper(load) if load is not None else np.zeros_like(self.motion)
         return self._residual(self.problem.rigid.values, self.motion)
 
     def rigid_stiffness(self, load, h: float = 1e-7) -> np.ndarray:

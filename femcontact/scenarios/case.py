@@ -68,7 +68,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     metrics = {**summary_metrics(simulation), **family_metrics(simulation)}
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
             "effects": list(scene["effects"]), "built": simulation.problem.built,
-            "stabilized_increments": simulation.stabilized_increments}
+            "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped}
     return {"metrics": metrics, "timings": simulation.timings, "info": info}
 
 

@@ -3,8 +3,10 @@
 A rigid peg on a `compliant_support` descends into a chamfered hole. Each history row becomes
 one point of the force history, in the analytic tier's conventions (femcontact.references.whitney):
 
-- depth s (mm): the support's rest position of the tip below the lower edge of the hole chamfer,
-  s = l_d0 - gripper_y - h_c (l_d0: the initial insertion depth, h_c the chamfer height);
+- depth s (mm): the tip's depth below the lower edge of the hole chamfer had the support no axial
+  compliance, s = l_d0 - (gripper_y + q_y) - h_c (l_d0: the initial insertion depth, q_y the
+  compliance centre's axial deflection from the gripper, h_c the chamfer height): the analytic
+  tier's support is rigid along the axis; `gripper_depth` leaves q_y out;
 - Fz (N): insertion force, the support pushing the peg down (-support_Fy); Fx (N): the support's
   lateral force on the peg; M (N*mm): the support's moment on the peg about its tip;
 - phase: from the contact zones A (x < 0) and B (x > 0): none; one zone whose leading tip
@@ -14,9 +16,11 @@ one point of the force history, in the analytic tier's conventions (femcontact.r
 
 Metrics: `two_point_onset` (the new zone's force extrapolated linearly to zero over the first
 two two-point rows, kept inside the increment where it appeared), `peak_force`/`peak_depth`
-(largest Fz at s >= 0), `chamfer_peak_force`, `jammed` (the insertion force runs away: its
-peak exceeds `JAM_RATIO` times the lateral force scale F_ref = K_x |eps0 + L_g theta0| +
-K_theta |theta0| / r that corrects the initial errors; a sliding insertion needs about mu F_ref),
+(largest Fz at s >= 0), `chamfer_peak_force`, `jammed` (the insertion force runs away:
+dFz/ds between two rows exceeds `JAM_SLOPE` K_x, or the scene's stop condition ended the run;
+`jam_depth` the first such depth). Measured on studies/insertion.toml: sliding insertions rise
+at most 1.8 K_x (the chamfer), the jammed case at 7 K_x in its first jammed increment and 170 K_x
+in the next, so 5 K_x separates them;
 `wedged` (a two-point row whose contact points lie inside each other's friction cones: the
 line joining the zone force centres within atan(mu) of the wall normal and of the peg's side
 normal, as in the analytic tier).
@@ -28,7 +32,7 @@ import numpy as np
 from geometry.placement import chamfer_height
 
 CONTACT_FLOOR = 1e-4
-JAM_RATIO = 5.0
+JAM_SLOPE = 5.0
 
 
 def force_history(scene: dict, history: list[dict]) -> dict:
@@ -38,7 +42,7 @@ def force_history(scene: dict, history: list[dict]) -> dict:
     r, lg = peg["width"] / 2, support["compliance_centre"]
     largest = max([max(row["contact_A_force"], row["contact_B_force"]) for row in history] + [0.0])
     floor = max(CONTACT_FLOOR * largest, 1e-12)
-    out = {key: [] for key in ("depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B")}
+    out = {key: [] for key in ("depth", "gripper_depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B")}
     for row in history:
         theta = math.radians(row["tilt_deg"])
         Fz, Fx = -row["support_Fy"], row["support_Fx"]
@@ -53,7 +57,8 @@ def force_history(scene: dict, history: list[dict]) -> dict:
             side = -1.0 if touching[0] == "A" else 1.0
             corner_y = row["tip_y"] + side * r * math.sin(theta)
             phase = "chamfer" if corner_y > -h_c else "one_point"
-        out["depth"].append(peg["insertion_depth"] - row["gripper_y"] - h_c)
+        out["depth"].append(peg["insertion_depth"] - row["gripper_y"] - row["support_qy"] - h_c)
+        out["gripper_depth"].append(peg["insertion_depth"] - row["gripper_y"] - h_c)
         out["Fz"].append(Fz)
         out["Fx"].append(Fx)
         out["M"].append(M)
@@ -84,16 +89,17 @@ def two_point_onset(curve: dict) -> float | None:
     return float(min(max(onset, depth[first - 1]), s0))
 
 
-def force_scale(scene: dict) -> float:
-    """F_ref (N): the lateral support force that corrects the initial errors, K_x |eps0 + L_g theta0| +
-    K_theta |theta0| / r (K from the support's diagonal)."""
+def jam_depth(scene: dict, curve: dict) -> float | None:
+    """First gripper depth (mm) where dFz/ds exceeds JAM_SLOPE K_x (s of the gripper: a jammed peg
+    stops while the gripper goes on), or None."""
     from femcontact.effects.compliant_support import stiffness_matrix
 
-    K = stiffness_matrix(scene)
-    peg, lg = scene["peg"], scene["support"]["compliance_centre"]
-    theta0 = math.radians(peg["tilt"])
-    kx, ktheta = K[0, 0], K[-1, -1] if scene["dim"] == 2 else K[4, 4]
-    return float(kx * abs(peg["offset"] - lg * math.sin(theta0)) + ktheta * abs(theta0) / (peg["width"] / 2))
+    limit = JAM_SLOPE * stiffness_matrix(scene)[0, 0]
+    depth, Fz = curve["gripper_depth"], curve["Fz"]
+    for i in range(1, len(depth)):
+        if depth[i] > depth[i - 1] and (Fz[i] - Fz[i - 1]) / (depth[i] - depth[i - 1]) > limit:
+            return float(depth[i])
+    return None
 
 
 def inside_cones(row: dict, mu: float) -> bool:
@@ -122,8 +128,9 @@ def insertion_metrics(simulation) -> dict:
         out["peak_force"], out["peak_depth"] = None, None
     chamfer = [f for f, ph in zip(curve["Fz"], curve["phase"]) if ph == "chamfer"]
     out["chamfer_peak_force"] = float(max(chamfer)) if chamfer else None
-    out["force_scale"] = force_scale(scene)
-    out["jammed"] = bool(Fz.max(initial=0.0) > JAM_RATIO * out["force_scale"])
+    out["jam_depth"] = jam_depth(scene, curve)
+    out["stopped"] = bool(simulation.stopped)
+    out["jammed"] = out["jam_depth"] is not None or out["stopped"]
     mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
     out["wedged"] = any(ph == "two_point" and inside_cones(row, mu) for row, ph in zip(history, curve["phase"]))
     out["final_depth"] = float(depth[-1])
@@ -131,5 +138,81 @@ def insertion_metrics(simulation) -> dict:
         out[f"{phase}_increments"] = sum(ph == phase for ph in curve["phase"])
     out["lambda_onset"] = (out["two_point_onset"] / (mu * scene["peg"]["width"])
                            if out["two_point_onset"] is not None and mu > 0 else None)
+    out.update(analytic_metrics(scene, curve))
     out["wall_time_s"] = float(sum(simulation.timings.values()))
+    return out
+
+
+# ---- the analytic tier on the same scene (femcontact.references.whitney) ----------------------
+PHASES = ("chamfer", "one_point", "two_point")
+
+
+def analytic_problem(scene: dict):
+    """The scene as a `whitney.Insertion` (2-D, diagonal support), or None when the analytic tier
+    does not describe it (3-D, a coupled stiffness, no chamfer)."""
+    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.references import whitney
+
+    K = stiffness_matrix(scene)
+    if scene["dim"] != 2 or np.count_nonzero(K - np.diag(np.diag(K))) or scene["hole"]["chamfer_width"] <= 0:
+        return None
+    peg, hole = scene["peg"], scene["hole"]
+    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    return whitney.Insertion(peg["width"], hole["width"], mu, K[0, 0], K[2, 2], scene["support"]["compliance_centre"],
+                             peg["offset"], math.radians(peg["tilt"]), hole["chamfer_width"],
+                             math.radians(hole["chamfer_angle"]))
+
+
+def analytic_curve(scene: dict, depth_max: float, points: int = 201) -> dict | None:
+    """The analytic force history to depth_max (mm), or None (see analytic_problem)."""
+    from femcontact.errors import InputError
+    from femcontact.references import whitney
+
+    problem = analytic_problem(scene)
+    if problem is None:
+        return None
+    try:
+        return whitney.insertion(problem, depth_max, points)
+    except InputError:
+        return None
+
+
+def compare(curve: dict, analytic: dict) -> dict:
+    """Per phase: the largest |FE - analytic| of Fz and Fx over the FE rows of that phase lying within
+    the analytic phase's depth range (interpolated inside it), relative to the largest analytic |Fz|
+    (|Fx|) of that phase; and the fraction of rows in contact whose phase the analytic state at the
+    nearest depth shares."""
+    a_depth = np.array(analytic["depth"])
+    out, agree, counted = {}, 0, 0
+    nearest = [int(np.argmin(np.abs(a_depth - s))) for s in curve["depth"]]
+    for phase in PHASES:
+        same = np.array([ph == phase for ph in analytic["phase"]])
+        if not same.any():
+            out.update({f"{q}_error_{phase}": None for q in ("fz", "fx")})
+            continue
+        depths = a_depth[same]  # interpolate inside the phase only: the forces jump between phases
+        rows = [i for i, ph in enumerate(curve["phase"]) if ph == phase and depths[0] <= curve["depth"][i] <= depths[-1]]
+        for quantity in ("Fz", "Fx"):
+            values = np.array(analytic[quantity])[same]
+            scale = float(np.abs(values).max())
+            errors = [abs(curve[quantity][i] - np.interp(curve["depth"][i], depths, values)) for i in rows]
+            out[f"{quantity.lower()}_error_{phase}"] = float(max(errors) / scale) if errors and scale > 0 else None
+    for i, ph in enumerate(curve["phase"]):
+        if ph != "none" and a_depth[0] <= curve["depth"][i] <= a_depth[-1]:
+            counted += 1
+            agree += analytic["phase"][nearest[i]] == ph
+    out["phase_agreement"] = agree / counted if counted else None
+    return out
+
+
+def analytic_metrics(scene: dict, curve: dict) -> dict:
+    """The analytic tier's onset, peaks, wedging and jamming, and the comparison per phase."""
+    analytic = analytic_curve(scene, max(curve["depth"][-1], 1e-3))
+    if analytic is None:
+        return {"analytic": False}
+    out = {"analytic": True, "analytic_two_point_onset": analytic["two_point_onset"],
+           "analytic_peak_force": analytic["peak_force"], "analytic_peak_depth": analytic["peak_depth"],
+           "analytic_chamfer_peak_force": analytic["chamfer_peak_force"],
+           "analytic_jams": analytic["jams"], "analytic_wedging": analytic["wedging_possible"]}
+    out.update(compare(curve, analytic))
     return out

@@ -65,6 +65,10 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
 
     if spec["kind"] == "wedge_map":
         return write_wedge_map(spec, rows, results)
+    from femcontact.study.insertion_plots import PLOTS
+
+    if spec["kind"] in PLOTS:
+        return PLOTS[spec["kind"]](spec, rows, results)
     x, y, series = spec["x"], spec["y"], spec["series"]
     groups: dict = {}
     for row in rows:

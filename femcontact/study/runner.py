@@ -60,8 +60,10 @@ SCHEMA = {
         "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
         "y": Field("str", doc="column on the y axis"),
         "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds)",
-                      choices=("line", "scatter", "wedge_map")),
+        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds); "
+                      "insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
+                      choices=("line", "scatter", "wedge_map", "insertion_history", "jamming_diagram",
+                               "wedging_window")),
         "logx": Field("bool", False, "logarithmic x axis"),
         "logy": Field("bool", False, "logarithmic y axis"),
         "title": Field("str", "", "plot title"),
