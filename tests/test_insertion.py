@@ -107,9 +107,10 @@ def test_rcc_support_reduces_to_the_x_z_plane():
 def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
     """Steel hole, support K_x 20 N/mm, K_theta 3000 N*mm/rad, L_g 10, eps0 0.6, mu 0.1 (the scene),
     0.1 mm increments, a coarse hole mesh (0.5 mm at the walls). The analytic tier is the rigid-hole
-    quasi-static solution (references/whitney.py). Measured on this mesh: Fz within 0.2 % (chamfer),
-    0.05 % (one point), 1.5 % (two point: the steel blocks' own compliance, which the rigid theory
-    lacks, lowers the force); tolerances 1 %, 1 %, 3 %. The onset is located within one increment."""
+    quasi-static solution (references/whitney.py). Measured on this mesh (790 dofs): Fz within 0.10 %
+    (chamfer), 0.03 % (one point), 1.3 % (two point: the steel blocks' own compliance, which the rigid
+    theory lacks, lowers the force), onset 2.546 against 2.543 mm, peak 2.021 against 2.038 N at
+    3.90 against 3.88 mm; tolerances 1 %, 1 %, 3 %, one increment (0.1 mm), 3 %, 0.3 mm."""
     from pathlib import Path
 
     from femcontact.scenarios.insertion import insertion_metrics
@@ -128,3 +129,35 @@ def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
     assert abs(m["two_point_onset"] - m["analytic_two_point_onset"]) < 0.1
     assert m["peak_force"] == pytest.approx(m["analytic_peak_force"], rel=0.03)
     assert abs(m["peak_depth"] - m["analytic_peak_depth"]) < 0.3
+
+
+def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
+    """3-D: a cylinder in a wide round hole on the RCC (design formula, 6x6), centre at the
+    reference point: q = K^-1 W for a force and a moment at C, the rotation a rotation vector
+    (R = exp(q_r)), so the tip lands at C0 + q_t + R (tip0 - C0) exactly."""
+    from pathlib import Path
+
+    from femcontact.effects.compliant_support import stiffness_matrix
+
+    data = ["dim=3", "effects=['compliant_support']", "hole.kind='single'", "hole.width=16.0", "hole.depth=6.0",
+            "hole.block_width=4.0", "hole.bottom_thickness=2.0", "hole.chamfer_width=0.0", "peg.insertion_depth=2.0",
+            "peg.offset=0.0", "mesh.contact_size=2.0", "mesh.size_max=4.0", "mesh.contact_zone=1.0",
+            "support.model='rcc'", "support.rcc.k=20.0", "support.compliance_centre=10.0",
+            "steps.0.increments=1", "steps.0.support_motion.y=0.0", "steps.0.force=[3.0, -2.0, 1.0]",
+            "steps.0.moment=[200.0, -300.0, 150.0]", "steps.0.load_point='reference'", "solver.rtol=1e-12",
+            "solver.atol=1e-9"]
+    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, data)
+    simulation = Simulation(scene, comm=MPI.COMM_WORLD)
+    simulation.run()
+    row = simulation.history[-1]
+    W = np.r_[scene["steps"][0]["force"], scene["steps"][0]["moment"]]
+    q = np.linalg.solve(stiffness_matrix(scene), W)
+    names = ("x", "y", "z", "rx", "ry", "rz")
+    assert [row[f"support_q{n}"] for n in names] == pytest.approx(q, rel=1e-7, abs=1e-12)
+    angle = np.linalg.norm(q[3:])
+    k = q[3:] / angle
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    R = np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+    tip0, centre0 = np.array([0.0, 0.0, -2.0]), np.array([0.0, 0.0, 8.0])
+    tip = centre0 + q[:3] + R @ (tip0 - centre0)
+    assert [row["tip_x"], row["tip_y"], row["tip_z"]] == pytest.approx(tip, abs=1e-9)

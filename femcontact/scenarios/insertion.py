@@ -11,7 +11,8 @@ one point of the force history, in the analytic tier's conventions (femcontact.r
   lateral force on the peg; M (N*mm): the support's moment on the peg about its tip;
 - phase: from the contact zones A (x < 0) and B (x > 0): none; one zone whose leading tip
   corner is still above the chamfer's lower edge: 'chamfer'; one zone otherwise: 'one_point';
-  both zones: 'two_point'. A zone is in contact when its force exceeds `CONTACT_FLOOR` of
+  both zones: 'two_point', with l (mm) from the tip to the edge contact (the higher zone force
+  centre) along the peg. A zone is in contact when its force exceeds `CONTACT_FLOOR` of
   the largest zone force of the run.
 
 Metrics: `two_point_onset` (the new zone's force extrapolated linearly to zero over the first
@@ -19,7 +20,7 @@ two two-point rows, kept inside the increment where it appeared), `peak_force`/`
 (largest Fz at s >= 0), `chamfer_peak_force`, `jammed` (the insertion force runs away:
 dFz/ds between two rows exceeds `JAM_SLOPE` K_x, or the scene's stop condition ended the run;
 `jam_depth` the first such depth). Measured on studies/insertion.toml: sliding insertions rise
-at most 1.8 K_x (the chamfer), the jammed case at 7 K_x in its first jammed increment and 170 K_x
+at most 1.8 K_x (the chamfer), the jammed case at 7.3 K_x in its first jammed increment and 165 K_x
 in the next, so 5 K_x separates them;
 `wedged` (a two-point row whose contact points lie inside each other's friction cones: the
 line joining the zone force centres within atan(mu) of the wall normal and of the peg's side
@@ -42,7 +43,7 @@ def force_history(scene: dict, history: list[dict]) -> dict:
     r, lg = peg["width"] / 2, support["compliance_centre"]
     largest = max([max(row["contact_A_force"], row["contact_B_force"]) for row in history] + [0.0])
     floor = max(CONTACT_FLOOR * largest, 1e-12)
-    out = {key: [] for key in ("depth", "gripper_depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B")}
+    out = {key: [] for key in ("depth", "gripper_depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B", "l")}
     for row in history:
         theta = math.radians(row["tilt_deg"])
         Fz, Fx = -row["support_Fy"], row["support_Fx"]
@@ -64,6 +65,9 @@ def force_history(scene: dict, history: list[dict]) -> dict:
         out["M"].append(M)
         out["theta"].append(row["tilt_deg"])
         out["phase"].append(phase)
+        # two-point: l from the tip to the edge contact (the higher zone centre) along the peg
+        higher = max(row["contact_A_y"], row["contact_B_y"]) if phase == "two_point" else math.nan
+        out["l"].append((higher - row["tip_y"]) / math.cos(theta))
         out["force_A"].append(row["contact_A_force"])
         out["force_B"].append(row["contact_B_force"])
     return out
@@ -116,7 +120,10 @@ def inside_cones(row: dict, mu: float) -> bool:
 
 
 def insertion_metrics(simulation) -> dict:
+    """The metrics above (2-D; a 3-D run reports its wall time only, its phases are not classified yet)."""
     scene, history = simulation.scene, simulation.history
+    if scene["dim"] != 2:
+        return {"analytic": False, "wall_time_s": float(sum(simulation.timings.values()))}
     curve = force_history(scene, history)
     depth, Fz = np.array(curve["depth"]), np.array(curve["Fz"])
     inside = depth >= 0
@@ -213,6 +220,7 @@ def analytic_metrics(scene: dict, curve: dict) -> dict:
     out = {"analytic": True, "analytic_two_point_onset": analytic["two_point_onset"],
            "analytic_peak_force": analytic["peak_force"], "analytic_peak_depth": analytic["peak_depth"],
            "analytic_chamfer_peak_force": analytic["chamfer_peak_force"],
-           "analytic_jams": analytic["jams"], "analytic_wedging": analytic["wedging_possible"]}
+           "analytic_jams": analytic["jams"], "analytic_jam_depth": analytic["jam_depth"],
+           "analytic_wedging": analytic["wedging_possible"]}
     out.update(compare(curve, analytic))
     return out

@@ -3,9 +3,9 @@
 - `insertion_history`: one panel per ok case, the FE force `y` (Fz, Fx or M) against the depth s
   with the FE phases shaded, the analytic tier's curve dashed on the same axes, and both
   two-point onsets marked;
-- `jamming_diagram`: Whitney's parallelogram in (F_x/F_z, M/(r F_z)) for a few lambda = l/(mu d)
-  at the study's first mu, with each case's two-point states and its last state marked
-  inserted (o) or jammed (x) by the FE;
+- `jamming_diagram`: one panel per mu: Whitney's parallelogram in (F_x/F_z, M/(r F_z)) for a few
+  lambda = l/(mu d), the FE two-point states coloured by their own lambda (a sliding state lies on
+  the two-point side of its lambda), each case's last state marked inserted (o) or jammed (x);
 - `wedging_window`: the tilt at two-point onset against the clearance ratio c, with the window
   c/mu < theta < sqrt(2c) where wedging is possible, cases marked wedged or not by the FE.
 """
@@ -47,7 +47,8 @@ def case_curves(row: dict, results: Path):
 
 def _label(scene: dict) -> str:
     peg, support = scene["peg"], scene["support"]
-    return (f"eps0 {peg['offset']:g}, th0 {peg['tilt']:g} deg, L_g {support['compliance_centre']:g}, "
+    rcc = f"RCC k {support['rcc']['k']:g}, " if support["model"] == "rcc" else ""
+    return (f"{rcc}eps0 {peg['offset']:g}, th0 {peg['tilt']:g} deg, L_g {support['compliance_centre']:g}, "
             f"mu {scene['contact']['mu']:g}, D {scene['hole']['width']:g}, E {scene['materials']['hole']['E']:g}")
 
 
@@ -96,7 +97,7 @@ def write_insertion_history(spec: dict, rows: list[dict], results: Path) -> Path
     if cases:
         axes.flat[0].legend(fontsize=6)
     figure.suptitle(spec["title"] or f"Insertion force history: FE (solid) and analytic (dashed), {quantity}")
-    figure.tight_layout()
+    figure.tight_layout(rect=(0, 0, 1, 0.98))
     path = results / _file(spec, f"insertion_history_{quantity}")
     figure.savefig(path, dpi=110)
     plt.close(figure)
@@ -105,38 +106,46 @@ def write_insertion_history(spec: dict, rows: list[dict], results: Path) -> Path
 
 def write_jamming_diagram(spec: dict, rows: list[dict], results: Path) -> Path:
     import matplotlib.pyplot as plt
+    from matplotlib import cm, colors
     from femcontact.references import whitney
 
-    cases = [(row, c) for row in rows if (c := case_curves(row, results)) is not None]
-    figure, axes = plt.subplots(figsize=(7, 6))
+    cases = [(row, c) for row in rows if (c := case_curves(row, results)) is not None
+             and any(ph == "two_point" for ph in c[0]["phase"])]
     mus = sorted({row["scene"]["contact"]["mu"] for row, _ in cases}) or [0.1]
-    mu = mus[0]
-    for lam in (0.5, 1.0, 2.0, 4.0):
-        corners = whitney.jamming_corners(lam, mu)
-        axes.plot(*np.vstack([corners, corners[:1]]).T, lw=1, label=f"lambda = {lam:g} (mu {mu:g})")
-    inserted = jammed = 0
-    for row, (curve, _) in cases:
-        r = row["scene"]["peg"]["width"] / 2
-        states = [i for i, ph in enumerate(curve["phase"]) if ph == "two_point" and abs(curve["Fz"][i]) > 1e-9]
-        if not states:
-            continue
-        x = [curve["Fx"][i] / curve["Fz"][i] for i in states]
-        y = [curve["M"][i] / (r * curve["Fz"][i]) for i in states]
-        axes.plot(x, y, "-", color="0.6", lw=0.8)
-        is_jammed = _flag(row, "jammed")
-        jammed += is_jammed
-        inserted += not is_jammed
-        axes.plot(x[-1], y[-1], "x" if is_jammed else "o", color="tab:red" if is_jammed else "tab:green",
-                  markersize=8, linestyle="none")
-    axes.plot([], [], "o", color="tab:green", label=f"FE inserted ({inserted})")
-    axes.plot([], [], "x", color="tab:red", label=f"FE jammed ({jammed})")
-    axes.set(xlabel="F_x / F_z", ylabel="M / (r F_z)  (M about the tip)",
-             title=spec["title"] or "Jamming diagram: two-point states of the FE cases (grey), last state marked")
-    axes.set_xlim(-1.2 / mu, 1.2 / mu)
-    axes.grid(alpha=0.3)
-    axes.legend(fontsize=7)
+    figure, axes = plt.subplots(1, len(mus), figsize=(6 * len(mus), 5.5), squeeze=False)
+    top = max([4.0] + [l / (row["scene"]["contact"]["mu"] * row["scene"]["peg"]["width"])
+                       for row, (curve, _) in cases for l, ph in zip(curve["l"], curve["phase"]) if ph == "two_point"])
+    norm = colors.Normalize(0.0, min(top, 20.0))
+    colour = cm.viridis
+    for panel, mu in zip(axes.flat, mus):
+        for lam in np.linspace(norm.vmax / 4, norm.vmax, 4):
+            corners = whitney.jamming_corners(lam, mu)
+            panel.plot(*np.vstack([corners, corners[:1]]).T, lw=1, color=colour(norm(lam)))
+        counts = {True: 0, False: 0}
+        for row, (curve, _) in cases:
+            if row["scene"]["contact"]["mu"] != mu:
+                continue
+            r, d = row["scene"]["peg"]["width"] / 2, row["scene"]["peg"]["width"]
+            states = [i for i, ph in enumerate(curve["phase"]) if ph == "two_point" and abs(curve["Fz"][i]) > 1e-9]
+            x = np.array([curve["Fx"][i] / curve["Fz"][i] for i in states])
+            y = np.array([curve["M"][i] / (r * curve["Fz"][i]) for i in states])
+            lam = np.array([curve["l"][i] / (mu * d) for i in states])
+            panel.scatter(x, y, c=lam, cmap=colour, norm=norm, s=10)
+            is_jammed = _flag(row, "jammed")
+            counts[is_jammed] += 1
+            panel.plot(x[-1], y[-1], "x" if is_jammed else "o", color="tab:red", markersize=10,
+                       markerfacecolor="none", linestyle="none")
+        panel.plot([], [], "o", color="tab:red", markerfacecolor="none", label=f"last state, FE inserted ({counts[False]})")
+        panel.plot([], [], "x", color="tab:red", label=f"last state, FE jammed ({counts[True]})")
+        panel.set(xlabel="F_x / F_z", ylabel="M / (r F_z)  (M about the tip)", title=f"mu = {mu:g}")
+        panel.set_xlim(-1.2 / mu, 1.2 / mu)
+        panel.grid(alpha=0.3)
+        panel.legend(fontsize=7)
+    figure.colorbar(cm.ScalarMappable(norm=norm, cmap=colour), ax=list(axes.flat), label="lambda = l / (mu d)")
+    figure.suptitle(spec["title"] or "Jamming diagram: parallelograms (colour = lambda) and the FE two-point "
+                    "states (dots, colour = their lambda)", fontsize=9)
     path = results / _file(spec, "jamming_diagram")
-    figure.savefig(path, dpi=120)
+    figure.savefig(path, dpi=110)
     plt.close(figure)
     return path
 
@@ -164,11 +173,12 @@ def write_wedging_window(spec: dict, rows: list[dict], results: Path) -> Path:
         line, = axes.plot(cs, cs / mu, "--", label=f"theta_W = c/mu (mu {mu:g})")
         axes.fill_between(cs, cs / mu, np.sqrt(2 * cs), where=cs / mu < np.sqrt(2 * cs), alpha=0.08,
                           color=line.get_color())
-    for wedged in (False, True):
-        chosen = [(p[0], p[1]) for p in points if p[3] == wedged]
-        if chosen:
-            axes.plot(*zip(*chosen), "s" if wedged else "o", color="tab:red" if wedged else "tab:green",
-                      linestyle="none", label=f"FE {'wedged' if wedged else 'not wedged'} ({len(chosen)})")
+        for wedged in (False, True):
+            chosen = [(p[0], p[1]) for p in points if p[3] == wedged and p[2] == mu]
+            if chosen:
+                axes.plot(*zip(*chosen), "s" if wedged else "o", color=line.get_color(), markersize=8,
+                          markerfacecolor=line.get_color() if wedged else "none", linestyle="none",
+                          label=f"FE {'wedged (filled)' if wedged else 'not wedged'}, mu {mu:g} ({len(chosen)})")
     axes.set(xlabel="clearance ratio c = (D - d)/D", ylabel="tilt at two-point onset (rad)",
              title=spec["title"] or "Wedging window c/mu < theta < sqrt(2c) and the FE cases", yscale="log")
     axes.grid(alpha=0.3)
