@@ -7,6 +7,7 @@ a one-unknown equilibrium solved here by bisection; a gripper motion carries the
 rigidly. Meshes are coarse: the hole is never touched.
 """
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,15 +17,17 @@ from femcontact.config.scene import load_scene
 from femcontact.errors import InputError
 from femcontact.solver.stepping import Simulation
 
-SCENE = "scenes/insertion_2d.toml"
+SCENE = str(Path(__file__).resolve().parents[1] / "scenes" / "insertion_2d.toml")
 FREE = ["hole.width=14.0", "peg.offset=0.0", "peg.insertion_depth=2.0", "steps.0.increments=1", "mesh.contact_size=1.0", "mesh.size_max=3.0",
         "mesh.contact_zone=1.0", "solver.rtol=1e-12", "solver.atol=1e-9",
         "steps.0.support_motion.y=0.0"]
+THREE_D = ["dim=3", "effects=['compliant_support']", "hole.kind='single'", "hole.width=16.0", "hole.depth=6.0",
+           "hole.block_width=4.0", "hole.bottom_thickness=2.0", "hole.chamfer_width=0.0", "peg.insertion_depth=2.0",
+           "peg.offset=0.0", "mesh.contact_size=2.0", "mesh.size_max=4.0", "mesh.contact_zone=1.0",
+           "support.model='rcc'", "steps.0.support_motion.y=0.0", "steps.0.stop.column=''"]
 
 
 def run(*overrides):
-    from pathlib import Path
-
     scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, FREE + list(overrides))
     simulation = Simulation(scene, comm=MPI.COMM_WORLD)
     simulation.run()
@@ -83,13 +86,13 @@ def test_gripper_motion_carries_the_unloaded_peg_rigidly():
 
 def test_support_motion_needs_the_effect():
     with pytest.raises(InputError, match=r"steps\[0\]\.support_motion\.y = -5.2: needs the 'compliant_support'"):
-        load_scene("scenes/insertion_2d.toml", ["effects=['friction', 'plane_strain']"])
+        load_scene(SCENE, ["effects=['friction', 'plane_strain']"])
 
 
 def test_a_bad_stiffness_matrix_is_refused_naming_the_key():
     from femcontact.effects.compliant_support import stiffness_matrix
 
-    scene = load_scene("scenes/insertion_2d.toml", ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"])
+    scene = load_scene(SCENE, ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"])
     with pytest.raises(InputError, match="support.stiffness: 2 values, expected 9"):
         stiffness_matrix(scene)
 
@@ -98,7 +101,7 @@ def test_rcc_support_reduces_to_the_x_z_plane():
     """The RCC design formula (reference §3) in 2-D: K_x = 3 k cos^2, K_z = 6 k sin^2, K_theta = k b^2 sin^2."""
     from femcontact.effects.compliant_support import stiffness_matrix
 
-    scene = load_scene("scenes/insertion_2d.toml", ["support.model='rcc'", "support.rcc={b=50.0, "
+    scene = load_scene(SCENE, ["support.model='rcc'", "support.rcc={b=50.0, "
                        "peg_length=50.0, theta_l=70.0, k=200.0}"])
     c2, s2 = math.cos(math.radians(70)) ** 2, math.sin(math.radians(70)) ** 2
     assert np.diag(stiffness_matrix(scene)) == pytest.approx([600 * c2, 1200 * s2, 200 * 2500 * s2], rel=1e-12)
@@ -111,8 +114,6 @@ def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
     (chamfer), 0.03 % (one point), 1.3 % (two point: the steel blocks' own compliance, which the rigid
     theory lacks, lowers the force), onset 2.546 against 2.543 mm, peak 2.021 against 2.038 N at
     3.90 against 3.88 mm; tolerances 1 %, 1 %, 3 %, one increment (0.1 mm), 3 %, 0.3 mm."""
-    from pathlib import Path
-
     from femcontact.scenarios.insertion import insertion_metrics
 
     scene = load_scene(Path(__file__).resolve().parents[1] / SCENE,
@@ -135,17 +136,11 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
     """3-D: a cylinder in a wide round hole on the RCC (design formula, 6x6), centre at the
     reference point: q = K^-1 W for a force and a moment at C, the rotation a rotation vector
     (R = exp(q_r)), so the tip lands at C0 + q_t + R (tip0 - C0) exactly."""
-    from pathlib import Path
-
     from femcontact.effects.compliant_support import stiffness_matrix
 
-    data = ["dim=3", "effects=['compliant_support']", "hole.kind='single'", "hole.width=16.0", "hole.depth=6.0",
-            "hole.block_width=4.0", "hole.bottom_thickness=2.0", "hole.chamfer_width=0.0", "peg.insertion_depth=2.0",
-            "peg.offset=0.0", "mesh.contact_size=2.0", "mesh.size_max=4.0", "mesh.contact_zone=1.0",
-            "support.model='rcc'", "support.rcc.k=20.0", "support.compliance_centre=10.0",
-            "steps.0.increments=1", "steps.0.support_motion.y=0.0", "steps.0.force=[3.0, -2.0, 1.0]",
-            "steps.0.moment=[200.0, -300.0, 150.0]", "steps.0.load_point='reference'", "solver.rtol=1e-12",
-            "solver.atol=1e-9"]
+    data = THREE_D + ["support.rcc.k=20.0", "support.compliance_centre=10.0", "steps.0.increments=1",
+                      "steps.0.force=[3.0, -2.0, 1.0]", "steps.0.moment=[200.0, -300.0, 150.0]",
+                      "steps.0.load_point='reference'", "solver.rtol=1e-12", "solver.atol=1e-9"]
     scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, data)
     simulation = Simulation(scene, comm=MPI.COMM_WORLD)
     simulation.run()
@@ -161,3 +156,17 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
     tip0, centre0 = np.array([0.0, 0.0, -2.0]), np.array([0.0, 0.0, 8.0])
     tip = centre0 + q[:3] + R @ (tip0 - centre0)
     assert [row["tip_x"], row["tip_y"], row["tip_z"]] == pytest.approx(tip, abs=1e-9)
+
+
+def test_rcc_support_is_the_truss_models_linear_stiffness():
+    """Model 'rcc' in 3-D: K equals the RCC truss's small-motion stiffness at its compliance centre
+    (femcontact.rcc.device.wrench, model 'linear', unit motions; device frame z down the peg: a half
+    turn about x, under which this diagonal K is unchanged)."""
+    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.rcc.device import Rcc, wrench
+
+    scene = load_scene(SCENE, THREE_D + ["support.rcc={b=43.3, peg_length=25.0, theta_l=60.0, k=30.0}"])
+    device = Rcc(43.3, 25.0, 60.0, 30.0)
+    truss = np.array([wrench(device, np.eye(6)[j], model="linear") for j in range(6)]).T
+    T = np.diag([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
+    assert stiffness_matrix(scene) == pytest.approx(T @ truss @ T, rel=1e-9, abs=1e-9 * np.abs(truss).max())
