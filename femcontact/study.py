@@ -76,7 +76,22 @@ SCHEMA = {
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
     },
+    "report": {
+        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
+                         "default: swept keys, status, the family's primary metrics, wall time)",
+                         check=lambda v: _check_columns(v)),
+    },
 }
+MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
+
+
+def _check_columns(columns: list[str]) -> str | None:
+    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
+    if bad:
+        return f"column {bad[0]!r} is empty or repeated"
+    if len(columns) > MAX_COLUMNS:
+        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
+    return None
 
 
 def flatten(table: dict, prefix: str = "") -> dict:
@@ -127,6 +142,7 @@ class Study:
     results: Path
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -194,7 +210,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         case.params = {key: get_key(case.scene, key) for key in keys}
     if settings["shared_steps"]:
         _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"])
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
 
 
 def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
