@@ -16,7 +16,7 @@ radius of its centre, in every coordinate). Sharp rigid corners make a stress si
 whose peak would otherwise paint everything else in the lowest colour. Values above the
 range take the top colour (the bar's arrow); the title states the true maximum and where it
 is (reference coordinates, and the nearest named point). pyvista draws each view without
-annotations; matplotlib lays them out.
+annotations (2-D without lighting, so the colours are the bar's); matplotlib lays them out.
 """
 import os
 
@@ -145,7 +145,7 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
     for view in views:
         plotter = pyvista.Plotter(off_screen=True, window_size=(size[0] // len(views), size[1]))
         actor = plotter.add_mesh(grid, scalars="von Mises", clim=colour_range(fields, percentile, view), cmap=CMAP,
-                                 show_edges=view is not None, show_scalar_bar=False)
+                                 show_edges=view is not None, show_scalar_bar=False, lighting=not plane)
         if "rigid_outline" in fields and len(fields["rigid_outline"]) > 1:  # 3-D cylinders have none
             plotter.add_mesh(pyvista.lines_from_points(fields["rigid_outline"]), color="black", line_width=3)
         _place_camera(plotter, grid, plane, view)
@@ -156,9 +156,9 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
     top = peak(fields)
     dpi = 100
     aspects = [image.shape[1] / image.shape[0] for image in images]
-    width = size[0] / dpi
-    height = min((width - 1.3 * len(views)) / sum(aspects) + 0.9, size[1] / dpi)  # bars 1.3 in, titles 0.9 in
-    figure = plt.figure(figsize=(width, height), dpi=dpi, layout="constrained")
+    bars, titles = 1.3 * len(views), 0.9  # inches
+    panel = min(size[1] / dpi - titles, (size[0] / dpi - bars) / sum(aspects))  # height of the views
+    figure = plt.figure(figsize=(panel * sum(aspects) + bars, panel + titles), dpi=dpi, layout="constrained")
     axes = figure.subplots(1, len(views), squeeze=False, gridspec_kw={"width_ratios": aspects})[0]
     for ax, image, view, limits in zip(axes, images, views, ranges):
         ax.imshow(image)
