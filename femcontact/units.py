@@ -72,7 +72,7 @@ LABELS = {
     "motion_ratio": "translation / link length",
     "centre_z": "compliance centre z (mm)",
     "centre_z_moved": "compliance centre z, moved (mm)",
-    "error_rx": "relative error rx",
+    **{f"error_{dof}": f"relative error {dof}" for dof in ("x", "y", "z", "rx", "ry", "rz")},
     # runner columns (femcontact.database)
     "case_id": "case",
     "status": "status",
