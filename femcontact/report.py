@@ -214,10 +214,16 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
             axes.plot(grid, d * np.sqrt(1 / (1 - grid) ** 2 - 1), "k--", label="l_crit(c)")
             for mu in sorted({column(p[4], "contact.mu") for p in points}):
                 axes.axhline(mu * d, color="k", linestyle=":", label=f"l_max = mu d (mu = {mu:g})")
+                axes.annotate(f"mu = {mu:g}", (1.0, mu * d), xycoords=("axes fraction", "data"), xytext=(-3, 2),
+                              textcoords="offset points", ha="right", va="bottom", fontsize=7,
+                              annotation_clip=True)
         else:
             axes.plot(grid, grid * d, "k:", label="l_max = mu d")
             for D in sorted({column(p[4], "hole.width") for p in points}):
                 axes.axhline(math.sqrt(D * D - d * d), color="k", linestyle="--", label=f"l_crit (D = {D:g})")
+                axes.annotate(f"l_crit, D = {D:g}", (1.0, math.sqrt(D * D - d * d)), xycoords=("axes fraction", "data"),
+                              xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom", fontsize=7,
+                              annotation_clip=True)
         axes.set_ylim(0, max(p[1] for p in points) * 1.15)
     agree = sum(p[2] == p[3] for p in points)
     axes.set(xlabel=units.label(x), ylabel=units.label(y),

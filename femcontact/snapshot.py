@@ -149,30 +149,31 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
         if "rigid_outline" in fields and len(fields["rigid_outline"]) > 1:  # 3-D cylinders have none
             plotter.add_mesh(pyvista.lines_from_points(fields["rigid_outline"]), color="black", line_width=3)
         _place_camera(plotter, grid, plane, view)
-        images.append(_trim(plotter.screenshot(return_img=True)))
+        image = plotter.screenshot(return_img=True)
+        images.append(_trim(image) if view is None else image)  # the zoom is framed by its camera
         ranges.append(tuple(float(v) for v in actor.mapper.lookup_table.scalar_range))
         plotter.close()
 
     top = peak(fields)
     dpi = 100
     aspects = [image.shape[1] / image.shape[0] for image in images]
-    bars, titles = 1.3 * len(views), 0.9  # inches
+    bars, titles = 1.1 * len(views), 1.1  # inches
     panel = min(size[1] / dpi - titles, (size[0] / dpi - bars) / sum(aspects))  # height of the views
     figure = plt.figure(figsize=(panel * sum(aspects) + bars, panel + titles), dpi=dpi, layout="constrained")
     axes = figure.subplots(1, len(views), squeeze=False, gridspec_kw={"width_ratios": aspects})[0]
     for ax, image, view, limits in zip(axes, images, views, ranges):
         ax.imshow(image)
         ax.set_axis_off()
-        what = "zoomed region" if view is not None else "body"
         ax.set_title("whole body" if view is None else
                      f"{zoom if isinstance(zoom, str) else 'zoom'}, {2 * view[1]:.3g} mm wide", fontsize=11)
         mappable = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(*limits), CMAP)
         bar = figure.colorbar(mappable, ax=ax, extend="max", shrink=0.9, aspect=30, pad=0.02)
-        bar.set_label(f"von Mises (MPa); top = {percentile:g}th percentile of the {what}", fontsize=9)
+        bar.set_label("von Mises (MPa)", fontsize=10)
     where = ", ".join(f"{c:.4g}" for c in top["at"][: 2 if plane else 3])
     near = f", {top['distance']:.2g} mm from {top['near']}" if top["near"] else ""
-    figure.suptitle(f"von Mises stress, displacements x {scale:g}: max {top['value']:.4g} MPa at ({where}) mm{near}",
-                    fontsize=12)
+    figure.suptitle(f"von Mises stress, displacements x {scale:g}: max {top['value']:.4g} MPa at ({where}) mm{near}\n"
+                    f"each colour bar: minimum to the {percentile:g}th percentile (by area) of its view; "
+                    "above: top colour", fontsize=11)
     figure.savefig(png_path, dpi=dpi)
     plt.close(figure)
     return {"ranges": ranges, "peak": top}
