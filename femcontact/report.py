@@ -90,7 +90,8 @@ def curves(spec: dict, rows: list[dict], keys: list[str]) -> list[dict]:
 
     kind "line": a line joins only cases that differ in x alone, i.e. agree on every other swept
     key (and on `series`); each such set is one curve, labelled by the keys where it differs from
-    the reference, the most common value of each (that curve comes first, labelled with them). A
+    the reference, the most common value of each (that curve comes first, labelled with them; in
+    a full grid, where no value is the most common, each curve is labelled with its values). A
     case with no partner is a lone marker. kind "scatter": one marker set per value of `series`."""
     x, y, series = spec["x"], spec["y"], spec["series"]
     points = []
@@ -104,16 +105,19 @@ def curves(spec: dict, rows: list[dict], keys: list[str]) -> list[dict]:
                          "or any scene key)")
     others = [k for k in dict.fromkeys(([series] if series else []) + (keys if spec["kind"] == "line" else []))
               if k != x]
-    reference = tuple(Counter(json.dumps(column(row, k)) for row, _, _ in points).most_common(1)[0][0]
-                      for k in others) if points else ()
-    varying = [k for k in others if len({json.dumps(column(row, k)) for row, _, _ in points}) > 1]
+    counts = [Counter(json.dumps(column(row, k)) for row, _, _ in points).most_common() for k in others]
+    varying = [k for k, count in zip(others, counts) if len(count) > 1]
+    # the reference: the most common value of every key, if no other value is as common (not in a full grid)
+    unique = all(len(count) == 1 or count[0][1] > count[1][1] for count in counts)
+    reference = tuple(count[0][0] for count in counts) if points and unique else None
     groups: dict = {}
     for row, xv, yv in points:
         groups.setdefault(tuple(json.dumps(column(row, k)) for k in others), []).append((xv, yv))
     out = []
-    for group, xy in sorted(groups.items(), key=lambda item: (item[0] != reference, item[0])):
+    for group, xy in sorted(groups.items(), key=lambda item: (item[0] != reference, [_order(v) for v in item[0]])):
         is_reference = group == reference and len(groups) > 1
-        shown = varying if is_reference else [k for k, v, r in zip(others, group, reference) if v != r]
+        shown = [k for k, v, r in zip(others, group, reference) if v != r] if reference and not is_reference \
+            else varying
         name = "; ".join(units.value_label(k, json.loads(v)) for k, v in zip(others, group) if k in shown)
         out.append({"label": ("reference: " if is_reference else "") + name, "points": sorted(xy),
                     "joined": spec["kind"] == "line" and len({p[0] for p in xy}) > 1, "reference": is_reference})
@@ -150,6 +154,12 @@ def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> 
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
+
+
+def _order(text: str) -> tuple:
+    """Sort key of a JSON-encoded value: numbers by value, before anything else by text."""
+    value = json.loads(text)
+    return (0, value, "") if _number(value) else (1, 0, text)
 
 
 def _plain_log_ticks(axes, spec: dict) -> None:
