@@ -69,7 +69,7 @@ $(STUDIES): %: setup
 	  if [ $$status -le 1 ]; then $(FEMCONTACT) report studies/$@.toml || exit $$?; fi; exit $$status
 
 bench: setup
-	$(PY) -m femcontact.bench
+	$(PY) -m femcontact.scenarios.bench
 
 clean:
 	rm -rf results

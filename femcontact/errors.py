@@ -1,5 +1,4 @@
 """Errors a user can cause: reported as one clear message, never a traceback."""
+from geometry.errors import InputError
 
-
-class InputError(ValueError):
-    """Bad user input (scene, study or command-line value); the message names the key and value."""
+__all__ = ["InputError"]

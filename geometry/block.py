@@ -12,7 +12,7 @@ import math
 
 import gmsh
 
-from femcontact.errors import InputError
+from geometry.errors import InputError
 from geometry import gmsh_tools
 
 

@@ -18,15 +18,15 @@ gap*cos(tilt) at corner A. In 3-D this is the same construction in the x-z
 plane, which is where a tilted cylinder first touches a round hole.
 Placement 'centred': tip centre on the hole axis at depth l_d, tilt `peg.tilt`.
 
-Only numpy and femcontact.analytic here: scene validation imports this module.
+Only numpy and geometry.two_point here: scene validation imports this module.
 """
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from femcontact import analytic
-from femcontact.errors import InputError
+from geometry import two_point
+from geometry.errors import InputError
 
 ARC_POINTS = 8  # points sampling each rounded peg corner in the overlap check
 GENERATORS = 64  # 3-D: peg surface lines checked for overlap (multiple of 4: includes the x-z plane)
@@ -74,13 +74,13 @@ def _tip_corner(peg: dict) -> tuple[np.ndarray, float]:
 
 
 def _two_point_depth(scene: dict) -> tuple[float, float, float, float]:
-    """Effective (d, D, l) for analytic.tilt_two_point, and the smallest insertion depth (mm)."""
+    """Effective (d, D, l) for two_point.tilt_two_point, and the smallest insertion depth (mm)."""
     peg, hole = scene["peg"], scene["hole"]
     (_, eta_b), r = _tip_corner(peg)
     d_eff = peg["width"] - r
     D_eff = hole["width"] - 2 * peg["gap"] - r
     l_eff = peg["insertion_depth"] - eta_b
-    return d_eff, D_eff, l_eff, eta_b + analytic.l_crit(d_eff, D_eff)
+    return d_eff, D_eff, l_eff, eta_b + two_point.l_crit(d_eff, D_eff)
 
 
 def peg_pose(scene: dict) -> Pose:
@@ -88,7 +88,7 @@ def peg_pose(scene: dict) -> Pose:
     peg, hole, dim = scene["peg"], scene["hole"], scene["dim"]
     d, length, l_d = peg["width"], peg["length"], peg["insertion_depth"]
     if peg["placement"] == "two_point":
-        tilt = analytic.tilt_two_point(*_two_point_depth(scene)[:3])
+        tilt = two_point.tilt_two_point(*_two_point_depth(scene)[:3])
         R = rotation(tilt, dim)
         h_c = chamfer_height(hole["chamfer_width"], hole["chamfer_angle"])
         corner_a = local_point(-hole["width"] / 2 + peg["gap"], -h_c, dim)
@@ -210,7 +210,7 @@ def check_peg_in_hole(scene: dict) -> None:
         l_min = _two_point_depth(scene)[3]
         if l_d < l_min:
             raise InputError(f"peg.insertion_depth = {l_d}: below {l_min:.6g}, the smallest depth with "
-                             f"two-point contact (l_crit = sqrt(D^2 - d^2) = {analytic.l_crit(d, D):.6g} "
+                             f"two-point contact (l_crit = sqrt(D^2 - d^2) = {two_point.l_crit(d, D):.6g} "
                              "without chamfers/gap); use placement = 'centred' for shallower pegs")
     pose = peg_pose(scene)
     deepest = min(line[:, -1].min() for line in _outline(scene, pose))

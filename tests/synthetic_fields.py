@@ -1,4 +1,4 @@
-"""Synthetic `fields.npz` files (the format `femcontact.snapshot.render` reads), for tests.
+"""Synthetic `fields.npz` files (the format `femcontact.outputs.snapshot.render` reads), for tests.
 
 A block under a pressed rigid disc: structured triangles (2-D) or tetrahedra (3-D),
 von Mises = 100 / (1 + r^2) around the contact point (0, 0(, 0)) (or, `singular`, a corner

@@ -9,8 +9,8 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.problem import Problem
-from femcontact.scene import resolve
+from femcontact.solver.problem import Problem
+from femcontact.config.scene import resolve
 from geometry.model import build
 
 
@@ -25,36 +25,43 @@ def problem(effects, **dynamics) -> Problem:
 
 def form_constants(p: Problem) -> set:
     names = {id(c): name for name, c in p.constants.items()}
-    forms = sum(p.bulk) + p.contact_integrand * p.ds_contact
+    forms = p.bulk + p.contact_integrand * p.ds_contact
     return {names[id(c)] for c in forms.constants() if id(c) in names}
+
+
+def history(p: Problem) -> set:
+    """History state the effects keep (beyond the unknowns u, r and the last pose)."""
+    return set(p.state()) - {"u", "r", "r_old"}
 
 
 def test_frictionless_quasi_static_builds_no_history_no_mass():
     p = problem(["plane_strain"])
     assert p.built == ["elasticity", "contact", "rigid_corners"]  # the flat punch has sharp corners
-    assert p.history == {}
-    assert p.stick is None and not p.rigid_inertia
+    assert history(p) == {"rigid_corners.tangential_old", "rigid_corners.corner_old", "rigid_corners.u_old"}
+    assert not p.rigid_residual(None).any() and not p.rigid_stiffness(None).any()
     assert form_constants(p) == {"E", "nu", "gamma"}
 
 
 def test_friction_adds_anchor_history_and_mu():
     p = problem(["friction", "plane_strain"])
-    assert "friction" in p.built and set(p.history) == {"anchor"}
+    assert "friction" in p.built and "friction.anchor" in history(p)
     assert {"mu", "gamma_t"} <= form_constants(p)
     assert "density" not in form_constants(p)
 
 
 def test_inertia_builds_mass_terms_only_when_asked():
     rigid_only = problem(["inertia", "plane_strain"])
-    assert rigid_only.rigid_inertia and rigid_only.history == {} and "density" not in form_constants(rigid_only)
+    assert {"inertia.velocity", "inertia.acceleration"} == {k for k in history(rigid_only) if k.startswith("inertia")}
+    assert "density" not in form_constants(rigid_only)
     full = problem(["inertia", "plane_strain"], deformable_inertia=True)
-    assert set(full.history) == {"u_old", "v_old", "a_old"}
+    assert {"inertia.u_old", "inertia.v_old", "inertia.a_old"} <= history(full)
     assert {"density", "dt", "beta"} <= form_constants(full)
 
 
 def test_gravity_adds_weight():
     p = problem(["gravity", "plane_strain"])
     assert "gravity" in p.built and {"density", "g"} <= form_constants(p)
+    assert p.rigid_residual(None)[1] == pytest.approx(p.rigid.mass * p.scene["dynamics"]["gravity"])
 
 
 @pytest.mark.parametrize("effects, energy", [

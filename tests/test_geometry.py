@@ -10,7 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from femcontact.errors import InputError
-from femcontact.scene import resolve
+from femcontact.config.scene import resolve
 from geometry import measures
 from geometry.model import build, write
 from geometry.placement import chamfer_height, peg_pose

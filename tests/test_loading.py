@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from femcontact import hertz
-from femcontact.loading import pulse
-from femcontact.scene import resolve
-from femcontact.simulation import Simulation
+from femcontact.scenarios import hertz
+from femcontact.solver.loading import pulse
+from femcontact.config.scene import resolve
+from femcontact.solver.stepping import Simulation
 
 
 @pytest.mark.parametrize("shape, area", [("triangle", 0.5), ("square", 1.0), ("haversine", 0.5)])

@@ -6,10 +6,10 @@ import re
 
 import pytest
 
-from femcontact import analytic
+from femcontact.references import peg_in_hole as analytic
 from femcontact.cli import main
 from femcontact.errors import InputError
-from femcontact.scene import case_id, load_scene, resolve
+from femcontact.config.scene import case_id, load_scene, resolve
 
 BASE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10, "insertion_depth": 5},
         "hole": {"width": 40.1}, "steps": [{"name": "load", "force": [-5.0, 1.0]}]}
@@ -28,8 +28,8 @@ BASE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10, 
     ({"dim": 4}, "dim = 4: not allowed, expected one of 2, 3"),
 ])
 def test_bad_scene_files_give_one_clear_message(tmp_path, change, message):
-    from femcontact.schema import set_key
-    from femcontact.study import to_toml
+    from femcontact.config.schema import set_key
+    from femcontact.study.runner import to_toml
 
     data = json.loads(json.dumps(BASE))
     for key, value in change.items():

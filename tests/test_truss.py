@@ -4,8 +4,9 @@ import itertools
 import numpy as np
 import pytest
 
-from femcontact.rcc import Rcc, displacement, formula_stiffness
-from femcontact.truss import State, Truss, angles_zyx, rotation_vector, rotation_zyx
+from femcontact.rcc.device import Rcc, displacement, formula_stiffness
+from femcontact.physics.rotation import rotation_numpy as rotation_zyx
+from femcontact.rcc.truss import State, Truss, angles_zyx, rotation_vector
 
 
 def test_rotation_order_is_rz_ry_rx_and_angles_round_trip():

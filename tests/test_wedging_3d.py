@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.scene import load_scene
-from femcontact.simulation import Simulation
+from femcontact.config.scene import load_scene
+from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[1] / "scenes" / "wedging_3d.toml"
 

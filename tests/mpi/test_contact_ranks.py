@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from femcontact.scene import resolve
-from femcontact.simulation import Simulation
+from femcontact.config.scene import resolve
+from femcontact.solver.stepping import Simulation
 
 SCENE = {
     "name": "ranks", "dim": 2, "geometry": "peg_in_hole", "effects": ["friction", "plane_strain"],

@@ -1,0 +1,1 @@
+"""Scene files: the schema of every key and its validation, loading and resolving scenes."""

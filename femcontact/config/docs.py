@@ -1,0 +1,41 @@
+"""docs/scenes.md, generated from the schemas: `python -m femcontact.config.docs > docs/scenes.md`.
+
+A test checks that the checked-in page equals `scene_page()`, so the page cannot drift
+from the code.
+"""
+from femcontact.config.schema import describe
+from femcontact.config.scene import contact_schema
+
+HEADER = """# Scene files
+
+A scene file (TOML) describes one simulation. `kind` selects the schema: `contact` (the finite-element
+contact solver; `geometry` = `peg_in_hole` or `block`) or `rcc` (the RCC truss). Every key is validated
+on load and with `--set KEY=VALUE`: an unknown key, a wrong type or an out-of-range value is one clear
+error naming the key, the value and what is allowed (exit code 2, no traceback).
+Generated from the schemas (`femcontact/config/scene.py`, `femcontact/rcc/device.py`) by
+`python -m femcontact.config.docs > docs/scenes.md`.
+"""
+TABLE = ["| key | allowed | default | meaning |", "|---|---|---|---|"]
+
+
+def scene_page() -> str:
+    from femcontact.rcc.device import SCHEMA as RCC_SCHEMA
+
+    peg = describe(contact_schema(2, "peg_in_hole"))
+    block = [line for line in describe(contact_schema(2, "block")) if line not in peg]
+    sections = [
+        ("## Contact scene, geometry = peg_in_hole (2-D shown; in 3-D `hole.kind` is `single`)", peg,
+         "Example: [`scenes/wedging_2d.toml`](../scenes/wedging_2d.toml) (push, then release), "
+         "[`scenes/wedging_moment_2d.toml`](../scenes/wedging_moment_2d.toml) (a couple, then release)."),
+        ("## Contact scene, geometry = block (keys that differ)", block,
+         "Example: [`scenes/hertz.toml`](../scenes/hertz.toml)."),
+        ("## RCC scene (kind = rcc)", describe(RCC_SCHEMA), "Example: [`scenes/rcc.toml`](../scenes/rcc.toml)."),
+    ]
+    lines = [HEADER]
+    for title, rows, example in sections:
+        lines += [title, "", *TABLE, *rows, "", example, ""]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(scene_page(), end="")

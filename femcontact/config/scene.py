@@ -1,0 +1,231 @@
+"""Scene files: one simulation described in TOML, validated against a schema.
+
+A scene names its `kind` ("contact": the finite-element contact solver; "rcc": the
+RCC truss), its geometry, materials, contact parameters, the physical `effects`
+it calls for, and its load steps. `load_scene` returns the fully resolved scene
+(every default filled in); `case_id` hashes it, so two files that differ only in
+key order or formatting describe the same case.
+"""
+import hashlib
+import json
+import tomllib
+from pathlib import Path
+
+from femcontact.errors import InputError
+from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+
+EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress")
+RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
+
+
+def _material(E=193000.0, nu=0.27, density=8.05e-9, yield_stress=210.0) -> dict:
+    """Defaults: stainless steel 316 as in the reference's wedging simulation."""
+    return {
+        "E": Field("float", E, "Young's modulus (MPa)", positive=True),
+        "nu": Field("float", nu, "Poisson's ratio", min=0.0, max=0.4999),
+        "density": Field("float", density, "density (t/mm^3)", min=0.0),
+        "yield_stress": Field("float", yield_stress, "initial yield stress (MPa), checked not modelled", positive=True),
+    }
+
+
+PEG = {
+    "width": Field("float", doc="peg width d in 2-D, diameter in 3-D (mm)", positive=True),
+    "length": Field("float", doc="peg length (mm)", positive=True),
+    "insertion_depth": Field("float", doc="l_d: length of peg inside the hole, along the peg axis (mm)", min=0.0),
+    "placement": Field("str", "two_point", "'two_point': tilt theta(l_d) touching both walls (less `gap`); "
+                       "'centred': axis through the hole centre at `tilt`", choices=("two_point", "centred")),
+    "tilt": Field("float", 0.0, "tilt (deg, counter-clockwise) for placement 'centred'", min=-89.0, max=89.0),
+    "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
+                 min=0.0),
+    "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
+    "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
+    "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
+}
+
+HOLE = {
+    "width": Field("float", doc="hole width D in 2-D, diameter in 3-D (mm)", positive=True),
+    "kind": Field("str", "two_blocks", "'two_blocks' (2-D: separate blocks A and B) or 'single' "
+                  "(one U-shaped block in 2-D, a block with a cylindrical hole in 3-D)",
+                  choices=("two_blocks", "single")),
+    "depth": Field("float", 20.0, "hole depth (mm)", positive=True),
+    "block_width": Field("float", 20.0, "width of each block beside the hole (mm)", positive=True),
+    "bottom_thickness": Field("float", 10.0, "material below the hole bottom, 'single' only (mm)", positive=True),
+    "chamfer_width": Field("float", 0.0, "hole-mouth chamfer width (mm)", min=0.0),
+    "chamfer_angle": Field("float", 45.0, "hole-mouth chamfer angle from the axis (deg)", min=1.0, max=89.0),
+    "support": Field("str", "outer", "fixed edge/face: 'outer' sides or 'bottom'", choices=("outer", "bottom")),
+}
+
+BLOCK = {
+    "width": Field("float", 100.0, "block width in x (mm)", positive=True),
+    "height": Field("float", 50.0, "block height in y (2-D) or z (3-D) (mm); top face at 0", positive=True),
+    "depth": Field("float", 100.0, "block depth in y, 3-D only (mm)", positive=True),
+}
+
+INDENTER = {
+    "shape": Field("str", "cylinder", "rigid indenter: 'cylinder' (disc in 2-D) or 'flat' (a rigid plate)",
+                   choices=("cylinder", "flat")),
+    "radius": Field("float", 50.0, "cylinder radius (mm)", positive=True),
+    "width": Field("float", 20.0, "flat indenter width (mm)", positive=True),
+}
+
+MESH = {
+    "resolution": Field("float", 1.0, "global refinement knob: every mesh size is divided by it", positive=True),
+    "contact_size": Field("float", 0.0, "element size in the contact zones (mm); 0 = automatic", min=0.0),
+    "size_max": Field("float", 0.0, "largest element size (mm); 0 = automatic", min=0.0),
+    "contact_zone": Field("float", 0.0, "half-length of each fine contact zone (mm), independent of "
+                          "`resolution`; 0 = automatic (see docs/geometry.md)", min=0.0),
+    "degree": Field("int", 1, "Lagrange degree of the displacement", choices=(1, 2)),
+}
+
+CONTACT = {
+    "mu": Field("float", 0.2, "Coulomb friction coefficient (used with the 'friction' effect)", min=0.0),
+    "method": Field("str", "nitsche", "'nitsche' (consistent) or 'penalty' (less accurate: penetration ~ p/gamma)",
+                    choices=("nitsche", "penalty")),
+    "gamma": Field("float", 10.0, "normal parameter: gamma_N = gamma * E / h (dimensionless)", positive=True),
+    "gamma_t": Field("float", 0.0, "tangential parameter gamma_T = gamma_t * E / h; 0 = same as gamma", min=0.0),
+    "theta": Field("float", 0.0, "Nitsche variant: 1 symmetric, 0 skew-less, -1 skew-symmetric",
+                   choices=(-1.0, 0.0, 1.0)),
+}
+
+STEP = {
+    "name": Field("str", "step", "step name"),
+    "duration": Field("float", 1.0, "step duration (s)", positive=True),
+    "increments": Field("int", 10, "number of increments", min=1),
+    "force": Field("floats", [], "force on the rigid body at `load_point` at the end of the step (N), [Fx, Fy(, Fz)]"),
+    "moment": Field("floats", [], "moment on the rigid body (N*mm): Mz in 2-D, [Mx, My, Mz] in 3-D"),
+    "load_point": Field("str", "peg_top", "named point where the force acts (e.g. peg_top, contact_A, peg_tip)"),
+    "amplitude": Field("str", "ramp", "'ramp': linear from the previous step's value; 'step': at once; "
+                       "'pulse': the value times a pulse train", choices=("ramp", "step", "pulse")),
+    "pulse": {
+        "frequency": Field("float", 10.0, "pulse frequency (Hz)", positive=True),
+        "duty": Field("float", 1.0, "fraction of each period the pulse lasts", positive=True, max=1.0),
+        "shape": Field("str", "triangle", "pulse shape", choices=("triangle", "square", "haversine")),
+    },
+    "motion": {name: Field("float", 0.0, "prescribed rigid-body displacement (mm) or rotation (rad) at the "
+                           "end of the step, for dofs set 'prescribed'") for name in RIGID_DOFS[3]},
+}
+
+SOLVER = {
+    "max_iterations": Field("int", 40, "Newton iterations per increment", min=1),
+    "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
+    "atol": Field("float", 1e-6, "absolute residual tolerance (N); the round-off floor of the contact "
+                  "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
+                  positive=True),
+    "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
+    "line_search": Field("bool", True, "backtracking line search on the residual norm"),
+    "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
+                           check=lambda v: None if isinstance(v, dict) else "must be a table"),
+}
+
+DYNAMICS = {
+    "newmark_beta": Field("float", 0.3025, "Newmark beta (0.25: no numerical damping)", positive=True, max=0.5),
+    "newmark_gamma": Field("float", 0.6, "Newmark gamma (0.5: no numerical damping)", min=0.5, max=1.0),
+    "deformable_inertia": Field("bool", False, "with 'inertia': also the deformable body's mass (else the rigid body only)"),
+    "gravity": Field("float", 9810.0, "gravitational acceleration for the 'gravity' effect (mm/s^2)", min=0.0),
+}
+
+OUTPUTS = {
+    "fields": Field("bool", False, "write displacement, von Mises and contact pressure to XDMF"),
+}
+
+
+def contact_schema(dim: int, geometry: str) -> dict:
+    """Schema of a contact scene for the given dimension and geometry."""
+    schema = {
+        "kind": Field("str", "contact", choices=("contact", "rcc")),
+        "name": Field("str", "scene", "scene name"),
+        "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
+        "geometry": Field("str", "peg_in_hole", "'peg_in_hole' or 'block' (a block under a rigid indenter)",
+                          choices=("peg_in_hole", "block")),
+        "rigid": Field("str", "peg" if geometry == "peg_in_hole" else "indenter", "the rigid body",
+                       choices=("peg", "hole") if geometry == "peg_in_hole" else ("indenter",)),
+        "effects": Field("strs", ["plane_strain"] if dim == 2 else [], "physics the scene calls for", choices=EFFECTS),
+        "mesh": MESH,
+        "contact": CONTACT,
+        "rigid_body": {
+            "dofs": {name: Field("str", "free", "'free' (driven by loads), 'held' or 'prescribed' (by steps.motion)",
+                                 choices=("free", "held", "prescribed")) for name in RIGID_DOFS[dim]},
+            "mass": Field("float", 0.0, "rigid body mass (t); 0 = from its geometry and density", min=0.0),
+        },
+        "steps": TableList(STEP, "load steps, in order"),
+        "dynamics": DYNAMICS,
+        "solver": SOLVER,
+        "outputs": OUTPUTS,
+    }
+    if geometry == "peg_in_hole":
+        hole = dict(HOLE)
+        if dim == 3:
+            hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
+        schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
+    else:
+        schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
+    return schema
+
+
+def _check_contact(scene: dict) -> None:
+    dim, effects = scene["dim"], scene["effects"]
+    problems = []
+    if "plane_strain" in effects and "plane_stress" in effects:
+        problems.append(f"effects = {effects}: 'plane_strain' and 'plane_stress' exclude each other")
+    if dim == 3 and {"plane_strain", "plane_stress"} & set(effects):
+        problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
+    moment_length = 1 if dim == 2 else 3
+    for i, step in enumerate(scene["steps"]):
+        if step["force"] and len(step["force"]) != dim:
+            problems.append(f"steps[{i}].force = {step['force']}: expected {dim} components")
+        if step["moment"] and len(step["moment"]) != moment_length:
+            problems.append(f"steps[{i}].moment = {step['moment']}: expected {moment_length} component(s)")
+        for name, value in step["motion"].items():
+            if value and scene["rigid_body"]["dofs"].get(name) != "prescribed":
+                problems.append(f"steps[{i}].motion.{name} = {value}: rigid_body.dofs.{name} is not 'prescribed'")
+    if problems:
+        raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
+    if scene["geometry"] == "peg_in_hole":
+        from geometry.placement import check_peg_in_hole
+
+        check_peg_in_hole(scene)
+
+
+def resolve(data: dict, overrides=()) -> dict:
+    """Validate raw scene data (plus 'key=value' overrides) and return the resolved scene."""
+    data = json.loads(json.dumps(data))  # deep copy, plain types
+    for text in overrides:
+        set_key(data, *parse_assignment(text))
+    kind = data.get("kind", "contact")
+    if kind == "rcc":
+        from femcontact.rcc import device as rcc
+
+        scene = validate(data, rcc.SCHEMA)
+        rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running
+        return scene
+    if kind != "contact":
+        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc'")
+    head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
+                    {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
+    scene = validate(data, contact_schema(head["dim"], head["geometry"]))
+    _check_contact(scene)
+    return scene
+
+
+def read_toml(path) -> dict:
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: not valid TOML: {error}") from None
+
+
+def load_scene(path, overrides=()) -> dict:
+    """Read, override and validate a scene file."""
+    try:
+        return resolve(read_toml(path), overrides)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def case_id(scene: dict) -> str:
+    """Stable 12-hex-digit id of a resolved scene: key order and number formatting do not matter."""
+    text = json.dumps(scene, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]

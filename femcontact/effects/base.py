@@ -1,0 +1,62 @@
+"""What an effect is: a small component that adds its terms to a `Problem` and owns its state.
+
+Every hook has a do-nothing default, so an effect writes only what it needs:
+
+- `constants(scene, body)`: initial values of the form constants it uses (a sweep changes
+  their values without recompiling forms);
+- `build(problem)`: add terms with `problem.add_bulk`, `add_contact_term`, `add_traction`;
+- `begin_increment(load)` / `commit(dt)`: before an increment / after it converged;
+- `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
+- `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
+- `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
+  the contact vector not written as integrals (node-to-segment elements);
+- `nodal_outputs()` (UFL values lumped to contact nodes, counted per row) and `outputs()`
+  (extra history columns); `load_scale()`: the size of the load it applies (N).
+"""
+import numpy as np
+
+
+class Effect:
+    name = ""
+
+    def __init__(self, problem):
+        self.problem = problem
+
+    def constants(self, scene: dict, body: str) -> dict:
+        return {}
+
+    def build(self, problem) -> None:
+        pass
+
+    def begin_increment(self, load) -> None:
+        pass
+
+    def commit(self, dt: float) -> None:
+        pass
+
+    def state(self) -> dict:
+        return {}
+
+    def restore(self, state: dict) -> None:
+        pass
+
+    def rigid_residual(self, load) -> np.ndarray | None:
+        return None
+
+    def rigid_stiffness(self, load) -> np.ndarray | None:
+        return None
+
+    def add_contact_residual(self, vector) -> None:
+        pass
+
+    def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
+        pass
+
+    def nodal_outputs(self) -> dict:
+        return {}
+
+    def outputs(self) -> dict:
+        return {}
+
+    def load_scale(self) -> float:
+        return 0.0

@@ -1,0 +1,76 @@
+"""Coulomb friction by a return map on a stick anchor (history).
+
+Each contact node remembers its anchor: the point of the rigid body, in the rigid body's
+frame, that it sticks to. The trial traction is -gamma_T times the tangential distance
+from the anchor (gamma_T = gamma_t E / h_contact, N/mm^3); it is projected on the disc of
+radius mu p. After each converged increment the anchor moves so that the next increment
+starts from the converged traction, so a load that is removed leaves the stuck state in
+place (and a peg that turns and slides is handled: anchors live in its frame).
+"""
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc
+from petsc4py import PETSc
+
+from femcontact.effects.base import Effect
+from femcontact.physics.rotation import rotation_numpy
+
+
+class Friction(Effect):
+    name = "friction"
+
+    def constants(self, scene: dict, body: str) -> dict:
+        contact = scene["contact"]
+        return {"mu": contact["mu"], "gamma_t": contact["gamma_t"] or contact["gamma"]}
+
+    def build(self, problem) -> None:
+        c, rigid, contact = problem.constants, problem.rigid, problem.contact
+        self.anchor = fem.Function(problem.V, name="anchor")
+        self.anchor.x.array[:] = problem.local_coordinates().reshape(-1)  # every node starts stuck
+        slip_local = contact.xi - self.anchor
+        slip_local = slip_local - ufl.dot(slip_local, contact.normal_local) * contact.normal_local
+        trial = -c["gamma_t"] * c["E"] / problem.model.h_contact * rigid.to_global_direction(slip_local, rigid.variable)
+        normal, bound = contact.normal, c["mu"] * contact.pressure
+        if problem.dim == 2:
+            tangent = ufl.as_vector([-normal[1], normal[0]])
+            q = ufl.dot(trial, tangent)
+            tangential = ufl.max_value(ufl.min_value(q, bound), -bound) * tangent
+            size = abs(q)
+        else:
+            size = ufl.sqrt(ufl.dot(trial, trial) + 1e-30)
+            tangential = ufl.conditional(ufl.le(size, bound), trial, bound * trial / size)
+        touching = ufl.gt(contact.pressure, 0)
+        self.stick = ufl.conditional(ufl.And(touching, ufl.lt(size, bound)), 1.0, 0.0)
+        self.slip = ufl.conditional(ufl.And(touching, ufl.ge(size, bound)), 1.0, 0.0)
+        problem.add_traction(tangential)
+        v = ufl.TestFunction(problem.V)
+        self.area_form = fem.form(sum(v[k] for k in range(problem.dim)) * problem.ds_contact)
+
+    def commit(self, dt: float) -> None:
+        """Move each node's anchor so that -gamma_T (xi - anchor) equals the converged
+        tangential traction: anchor = xi + R^T t / gamma_T. The traction per node is its
+        contact force (integral terms only) over its lumped contact area."""
+        p = self.problem
+        vectors = []
+        for form in (p.forms.residual_contact, self.area_form):
+            vector = petsc.assemble_vector(form)
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            with vector.localForm() as local:
+                vectors.append(local.array.reshape(-1, p.dim).copy())
+            vector.destroy()
+        force, weight = vectors[0], vectors[1][:, :1]
+        traction = np.where(weight > 0, -force / np.where(weight > 0, weight, 1.0), 0.0)
+        R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0
+        gamma_t = float(p.constants["gamma_t"].value * p.constants["E"].value) / p.model.h_contact
+        self.anchor.x.array[:] = (p.local_coordinates() + traction @ R / gamma_t).reshape(-1)
+
+    def state(self) -> dict:
+        return {"anchor": self.anchor.x.array.copy()}
+
+    def restore(self, state: dict) -> None:
+        self.anchor.x.array[:] = state["anchor"]
+
+    def nodal_outputs(self) -> dict:
+        return {"stick": self.stick, "slip": self.slip}

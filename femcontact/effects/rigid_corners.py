@@ -1,0 +1,222 @@
+"""Sharp corners of a rigid body against the deformable surface (2-D, P1).
+
+The contact integral sees the rigid body only through its signed distance, which is
+right where a corner of the deformable body presses a rigid face, but blind where a
+sharp rigid corner presses a deformable face: at the micrometre penetrations of these
+loads no mesh node lies inside the corner. Each sharp corner of the rigid body is
+therefore also a slave point of a node-to-segment element against the deformable
+contact surface (the two-pass idea of engineering codes): penalty normal force
+f_n = kappa [-g]_+ with kappa = gamma * E (N/mm per mm of thickness, the stiffness a
+contact node gets from the Nitsche term), and, with friction, a Coulomb return map
+on the tangential force with the slip measured relative to the surface's material
+point. The force enters the contact vector C at the segment's two nodes, so the
+rigid-body rows of the Newton system follow from C as for the integral terms. The
+element's Jacobian is taken by central differences with the contact state frozen.
+
+In 3-D the rims of a rigid cylinder are not treated this way (yet): an attempt with
+node-to-triangle rim points did not converge (commit e18e21b, docs/wedging_3d.md); the
+rim is seen once the wall nodes next to it touch the peg's side.
+"""
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from femcontact.effects.base import Effect
+from femcontact.physics.signed_distance import reference_point
+
+
+def corner_points(rigid: dict) -> np.ndarray:
+    """Sharp corners of a 2-D rectangle in its shape frame about the reference point."""
+    if rigid["shape"] != "rectangle" or rigid["corner_radius"] > 0:
+        return np.zeros((0, 2))
+    w, h = rigid["half_width"], rigid["length"] / 2
+    return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+
+
+class RigidCorners(Effect):
+    """Node-to-segment contact of the rigid body's sharp corners (2-D, P1)."""
+    name = "rigid_corners"
+
+    @staticmethod
+    def applies(problem) -> bool:
+        """Built when the rigid shape has sharp corners, in 2-D with P1 elements."""
+        return problem.dim == 2 and problem.scene["mesh"]["degree"] == 1 and len(corner_points(problem.model.rigid)) > 0
+
+    def __init__(self, problem):
+        super().__init__(problem)
+        p = problem
+        self.points = corner_points(p.model.rigid)
+        self.friction = "friction" in p.effects
+        self.segments = self._segments()
+        self.active_count = 0
+        self.search = 4 * p.model.h_contact
+        n = len(self.points)
+        self.tangential_old = np.zeros(n)
+        self.tangential = np.zeros(n)
+        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]) if n else np.zeros((0, 2))
+        self.u_old = p.u.x.array.copy()
+        self.active = np.zeros(n, dtype=bool)
+
+    def _segments(self) -> np.ndarray:
+        """Owned contact facets as rows (node a, node b, opposite node) of V's block dofs."""
+        p = self.problem
+        mesh, tdim = p.mesh, p.dim
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        mesh.topology.create_connectivity(tdim, tdim - 1)
+        f2c, c2f = mesh.topology.connectivity(tdim - 1, tdim), mesh.topology.connectivity(tdim, tdim - 1)
+        n_cells = mesh.topology.index_map(tdim).size_local
+        rows = []
+        for name in p.model.contact_facets:
+            for facet in p.model.facet_tags.find(p.model.facets[name]):
+                cell = f2c.links(facet)[0]
+                if cell >= n_cells:
+                    continue
+                local = int(np.where(c2f.links(cell) == facet)[0][0])
+                dofs = p.V.dofmap.cell_dofs(cell)
+                rows.append([dofs[(local + 1) % 3], dofs[(local + 2) % 3], dofs[local]])
+        return np.array(rows, dtype=np.int32).reshape(-1, 3)
+
+    # -- the element ------------------------------------------------------------------
+    def _force(self, k: int, corner: np.ndarray, xa, xb, xc, s_fixed=None, state=None):
+        """Force on the rigid corner (N) and the segment parameter for one corner."""
+        p = self.problem
+        edge = xb - xa
+        s = np.clip((corner - xa) @ edge / (edge @ edge), 0.0, 1.0) if s_fixed is None else s_fixed
+        normal = np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)
+        if normal @ (xa - xc) < 0:
+            normal = -normal  # outward from the deformable body
+        point = xa + s * edge
+        gap = (corner - point) @ normal
+        kappa = float(p.constants["gamma"].value * p.constants["E"].value)
+        active = gap < 0 if state is None else state[0]
+        f_n = kappa * max(-gap, 0.0) if state is None else kappa * (-gap) * active
+        force = f_n * normal
+        f_t = 0.0
+        if self.friction and active:
+            tangent = np.array([-normal[1], normal[0]])
+            xa0, xb0 = self._old_segment
+            slip = (corner - self.corner_old[k]) - (point - (xa0 + s * (xb0 - xa0)))
+            kappa_t = float(p.constants["gamma_t"].value * p.constants["E"].value)
+            trial = self.tangential_old[k] - kappa_t * (slip @ tangent)
+            bound = float(p.constants["mu"].value) * f_n
+            stick = abs(trial) <= bound if state is None else state[1]
+            f_t = trial if stick else np.sign(trial if state is None else state[2]) * bound
+            force = force + f_t * tangent
+            return force, s, gap, (active, stick, np.sign(trial)), f_t
+        return force, s, gap, (active, True, 0.0), f_t
+
+    def _find(self, corner: np.ndarray, u: np.ndarray):
+        """Best segment on this rank: (distance, row) with the corner projecting inside it."""
+        if not len(self.segments):
+            return np.inf, -1
+        x = self.coordinates + u.reshape(-1, 2)
+        xa, xb = x[self.segments[:, 0]], x[self.segments[:, 1]]
+        edge = xb - xa
+        length2 = np.einsum("ij,ij->i", edge, edge)
+        t = np.einsum("ij,ij->i", corner - xa, edge) / length2
+        distance = np.abs(np.cross(edge, corner - xa)) / np.sqrt(length2)
+        distance[(t < -1e-9) | (t > 1 + 1e-9) | (distance > self.search)] = np.inf
+        row = int(np.argmin(distance))
+        return (float(distance[row]), row) if np.isfinite(distance[row]) else (np.inf, -1)
+
+    def contributions(self, with_jacobian: bool):
+        """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""
+        p = self.problem
+        self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
+        u = p.u.x.array
+        comm = p.mesh.comm
+        out = []
+        for k, point in enumerate(self.points):
+            corner = p.rigid.place(point + _tip(p))
+            distance, row = self._find(corner, u)
+            owner = int(np.argmin(comm.allgather(distance)))
+            self.active[k] = False
+            if comm.rank != owner or row < 0:
+                continue
+            a, b, c = self.segments[row]
+            self._old_segment = (self.coordinates[a] + self.u_old[2 * a: 2 * a + 2],
+                                 self.coordinates[b] + self.u_old[2 * b: 2 * b + 2])
+            xa, xb, xc = (self.coordinates[i] + u[2 * i: 2 * i + 2] for i in (a, b, c))
+            force, s, gap, state, f_t = self._force(k, corner, xa, xb, xc)
+            if not state[0]:
+                continue
+            self.active[k] = True
+            self.tangential[k] = f_t
+            dofs = np.array([2 * a, 2 * a + 1, 2 * b, 2 * b + 1], dtype=np.int32)
+            entries = np.r_[(1 - s) * force, s * force]
+            dC_du = dC_dr = None
+            if with_jacobian:
+                dC_du, dC_dr = self._derivatives(k, point, (a, b, c), state)
+            out.append((dofs, entries, dC_du, dC_dr))
+        active = comm.allreduce(int(self.active.sum()), op=MPI.SUM)
+        return out, active
+
+    def _derivatives(self, k, point, nodes, state, h=1e-9):
+        """Central differences of the C entries in the 4 segment dofs and the rigid dofs."""
+        p = self.problem
+        a, b, c = nodes
+        base_u = p.u.x.array
+        x = {i: self.coordinates[i] + base_u[2 * i: 2 * i + 2] for i in nodes}
+        r0 = p.rigid.values.copy()
+
+        def entries(dx_a, dx_b, r):
+            corner = p.rigid.place(point + _tip(p), r)
+            force, s, *_ = self._force(k, corner, x[a] + dx_a, x[b] + dx_b, x[c], state=state)
+            return np.r_[(1 - s) * force, s * force]
+
+        dC_du = np.zeros((4, 4))
+        for j in range(4):
+            e = np.zeros(4)
+            e[j] = h
+            dC_du[:, j] = (entries(e[:2], e[2:], r0) - entries(-e[:2], -e[2:], r0)) / (2 * h)
+        dC_dr = np.zeros((4, len(r0)))
+        for j in range(len(r0)):
+            e = np.zeros(len(r0))
+            e[j] = h
+            dC_dr[:, j] = (entries(0, 0, r0 + e) - entries(0, 0, r0 - e)) / (2 * h)
+        return dC_du, dC_dr
+
+    # -- assembly into the Newton system ------------------------------------------------
+    def add_contact_residual(self, vector: PETSc.Vec) -> None:
+        """Add the corners' C entries to the contact vector's local form (before ghost update)."""
+        contributions, self.active_count = self.contributions(with_jacobian=False)
+        with vector.localForm() as local:
+            for dofs, entries, _, _ in contributions:
+                local.array[dofs] += entries
+
+    def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
+        """Add dC/du to each matrix (local indices) and dC/dr to the kur vectors' local forms."""
+        contributions, _ = self.contributions(with_jacobian=True)
+        for matrix in matrices:
+            matrix.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
+            matrix.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        for dofs, _, dC_du, dC_dr in contributions:
+            keep = np.array([d not in bc_dofs for d in dofs])
+            rows = dofs[keep]
+            for matrix in matrices:
+                matrix.setValuesLocal(rows, rows, dC_du[np.ix_(keep, keep)], addv=PETSc.InsertMode.ADD_VALUES)
+            for j, vector in enumerate(kur):
+                with vector.localForm() as local:
+                    local.array[dofs] += dC_dr[:, j]
+
+    def commit(self, dt: float) -> None:
+        p = self.problem
+        self.tangential_old[:] = np.where(self.active, self.tangential, 0.0)
+        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 2)
+        self.u_old = p.u.x.array.copy()
+
+    def state(self) -> dict:
+        return {"tangential_old": self.tangential_old.copy(), "corner_old": self.corner_old.copy(),
+                "u_old": self.u_old.copy()}
+
+    def restore(self, state: dict) -> None:
+        self.tangential_old[:] = state["tangential_old"]
+        self.corner_old, self.u_old = state["corner_old"].copy(), state["u_old"].copy()
+
+    def outputs(self) -> dict:
+        return {"corner_contacts": self.active_count}
+
+
+def _tip(problem) -> np.ndarray:
+    """Offset from the reference-point frame to the tip-centred frame used by RigidBody.place."""
+    return reference_point(problem.model.rigid)

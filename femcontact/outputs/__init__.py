@@ -1,0 +1,1 @@
+"""What a run writes: one history row per increment, fields, snapshots."""

@@ -1,0 +1,126 @@
+"""What a simulation reports after each increment, correct under MPI.
+
+Reactions come from the assembled residual at the support dofs (variationally
+consistent, so they balance the rigid body's load to solver tolerance); contact
+resultants from the contact residual, per zone (A: x < 0, B: x > 0 for a peg in a
+hole, one zone `top` for a block); nodal contact pressure and stick/slip states
+from boundary integrals lumped to the P1 nodes of the contact surface.
+"""
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+
+
+class Recorder:
+    """Computes one row of outputs per increment from a solved Problem."""
+
+    def __init__(self, problem, newton):
+        self.problem, self.newton = problem, newton
+        p, comm = problem, problem.mesh.comm
+        self.comm = comm
+        self.energy = fem.form(p.energy_density * p.dx)
+        degree = p.scene["mesh"]["degree"] - 1
+        self.W = fem.FunctionSpace(p.mesh, ("DG", degree))
+        self.von_mises = fem.Function(self.W, name="von_mises")
+        self.von_mises_expression = fem.Expression(p.von_mises, self.W.element.interpolation_points())
+        pressure = p.contact.pressure
+        nodal = {"pressure": pressure, "active": ufl.conditional(ufl.gt(pressure, 0), 1.0, 0.0)}
+        for component in p.components:
+            nodal.update(component.nodal_outputs())
+        self.states = [name for name in nodal if name != "pressure"]  # counted per row as <name>_nodes
+        self.nodal_names = list(nodal) + ["area"]
+        values = list(nodal.values()) + [1.0]
+        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
+        q = ufl.TestFunction(self.Q)
+        self.nodal_form = fem.form(sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact)
+        self.nodal = fem.Function(self.Q)
+        n_owned = p.V.dofmap.index_map.size_local
+        x = newton.coordinates
+        on_contact = np.zeros(n_owned, dtype=bool)
+        for name in p.model.contact_facets:
+            facets = p.model.facet_tags.find(p.model.facets[name])
+            dofs = fem.locate_dofs_topological(p.V, p.dim - 1, facets)
+            on_contact[dofs[dofs < n_owned]] = True
+        if p.scene["geometry"] == "peg_in_hole":
+            self.zones = {"A": on_contact & (x[:, 0] < 0), "B": on_contact & (x[:, 0] >= 0)}
+        else:
+            self.zones = {"top": on_contact}
+
+    def _sum(self, value):
+        return self.comm.allreduce(value, op=MPI.SUM)
+
+    def _max(self, value):
+        return self.comm.allreduce(value, op=MPI.MAX)
+
+    def nodal_values(self) -> dict:
+        """Lumped nodal contact values on this rank's owned P1 nodes (pressure in MPa)."""
+        from dolfinx.fem import petsc
+        from petsc4py import PETSc
+
+        vec = self.nodal.vector
+        with vec.localForm() as local:
+            local.set(0.0)
+        petsc.assemble_vector(vec, self.nodal_form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        n, k = self.Q.dofmap.index_map.size_local, len(self.nodal_names)
+        values = self.nodal.x.array[: n * k].reshape(-1, k)
+        area = values[:, -1]
+        where = area > 0
+        out = {name: np.where(where, values[:, i] / np.where(where, area, 1), 0.0)
+               for i, name in enumerate(self.nodal_names[:-1])}
+        out["coordinates"] = self.Q.tabulate_dof_coordinates()[:n]
+        out["on_surface"] = where
+        return out
+
+    def row(self, load, iterations: int) -> dict:
+        p, newton = self.problem, self.newton
+        dim, rigid = p.dim, p.rigid
+        row = {"step": p.scene["steps"][load.step]["name"], "time": load.time, "dt": load.dt,
+               "newton_iterations": iterations}
+        for name, value in zip(rigid.names, rigid.values):
+            row[f"rigid_{name}"] = float(value)
+        row["tilt_deg"] = np.degrees(rigid.tilt())
+        for k, axis in enumerate("xyz"[:dim]):
+            row[f"applied_F{axis}"] = float(load.force[k])
+
+        R_u, _, _ = newton.assemble_residual(load)
+        full = newton.b_bulk.array_r + newton.b_contact.array_r
+        full = full.reshape(-1, dim)
+        x = newton.coordinates + p.u.x.array[: newton.n_owned * dim].reshape(-1, dim)
+        for name, dofs in p.support_dofs.items():
+            owned = dofs[dofs < newton.n_owned]
+            force = np.array([self._sum(full[owned, k].sum()) for k in range(dim)])
+            for k, axis in enumerate("xyz"[:dim]):
+                row[f"reaction_{name}_{axis}"] = force[k]
+            row[f"reaction_{name}"] = float(np.linalg.norm(force))
+            moment = np.atleast_1d(np.cross(x[owned], full[owned]).sum(axis=0))  # about the origin
+            for k, axis in enumerate(["z"] if dim == 2 else "xyz"):
+                row[f"reaction_{name}_M{axis}"] = self._sum(float(moment[k]))
+
+        contact = newton.b_contact.array_r.reshape(-1, dim)
+        for zone, mask in self.zones.items():
+            f = -contact[mask]  # force of the rigid body on the deformable one
+            force = np.array([self._sum(f[:, k].sum()) for k in range(dim)])
+            weight = np.linalg.norm(f, axis=1)
+            total = self._sum(weight.sum())
+            centre = np.array([self._sum((x[mask, k] * weight).sum()) for k in range(dim)]) / (total or 1.0)
+            for k, axis in enumerate("xyz"[:dim]):
+                row[f"contact_{zone}_F{axis}"] = force[k]
+                row[f"contact_{zone}_{axis}"] = centre[k] if total > 0 else None  # no contact: no centre
+            row[f"contact_{zone}_force"] = float(np.linalg.norm(force))
+
+        nodal = self.nodal_values()
+        row["max_pressure"] = self._max(float(nodal["pressure"].max(initial=0.0)))
+        for state in self.states:
+            row[f"{state}_nodes"] = int(self._sum(int((nodal[state] > 0.5).sum())))
+        for component in p.components:
+            row.update(component.outputs())
+        row["elastic_energy"] = self._sum(fem.assemble_scalar(self.energy))
+        self.von_mises.interpolate(self.von_mises_expression)
+        n = self.W.dofmap.index_map.size_local
+        row["max_von_mises"] = self._max(float(self.von_mises.x.array[:n].max(initial=0.0)))
+        row["yielded"] = bool(row["max_von_mises"] > p.scene["materials"][p.deformable]["yield_stress"])
+        return row
+

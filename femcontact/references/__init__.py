@@ -1,0 +1,1 @@
+"""Closed forms from the references (peg-in-hole geometry and wedging, Hertz)."""

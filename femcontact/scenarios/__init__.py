@@ -1,0 +1,1 @@
+"""Study families: scene factories and the metrics of wedging, the Hertz benchmark, benchmarks."""

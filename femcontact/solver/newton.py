@@ -1,0 +1,258 @@
+"""Monolithic Newton for the deformable body (u) and the rigid body (r) together.
+
+Each iteration solves the bordered system
+
+    [K_uu  K_ur] [du]     [R_u]
+    [K_ru  K_rr] [dr] = - [R_r]
+
+by eliminating the few rigid unknowns with a Schur complement: one factorisation of
+K_uu serves the residual and the n_r columns of K_ur, then the small dense system
+S dr = -R_r + K_ru y, S = K_rr - K_ru X, gives dr. The Jacobian is consistent: K_uu
+and K_ur come from UFL derivatives of the residual, the rigid rows from the contact
+vector C (N) tested with the rigid-body modes W(u, r) of the current configuration:
+
+    R_r = -(Q_ext(r) + W^T C) + R_effects(r)      (forces N, moments N*mm)
+
+where R_effects are the effects' own rigid-body terms (inertia M a(r), weight). The
+solver calls only the problem's forms and hooks; it names no effect.
+
+A backtracking line search on |R|^2 damps the semismooth Newton where stick/slip
+or contact sets change. A failed linear solve, a NaN or too many iterations raise
+`NewtonFailure`, which the stepper answers by cutting the increment.
+"""
+import numpy as np
+from dolfinx import la
+from dolfinx.fem import petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from femcontact.physics.rotation import cross_with_axis, rigid_modes
+
+DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+
+
+class NewtonFailure(RuntimeError):
+    """Newton did not converge; `history` holds the residual norms per iteration."""
+
+    def __init__(self, message: str, history: list):
+        super().__init__(f"{message}; residual history {['%.3e' % r for r in history]}")
+        self.history = history
+
+
+class SchurNewton:
+    """Newton solver with the rigid-body unknowns condensed by a Schur complement."""
+
+    def __init__(self, problem, prefix: str = "femcontact_"):
+        self.problem = p = problem
+        forms, n_r = p.forms, len(p.rigid.names)
+        self.K = petsc.create_matrix(forms.jacobian)
+        self.Kc = petsc.create_matrix(forms.jacobian_contact)
+        self.b_bulk = petsc.create_vector(forms.residual_bulk)
+        self.b_contact = petsc.create_vector(forms.residual_contact)
+        self.kur = [petsc.create_vector(form) for form in forms.contact_dr]
+        self.work = [p.u.vector.copy() for _ in range(2 * n_r + 3)]
+
+        self.ksp = PETSc.KSP().create(p.mesh.comm)
+        self.ksp.setOptionsPrefix(prefix)
+        options = PETSc.Options()
+        for key, value in {**DEFAULT_PETSC_OPTIONS, **p.scene["solver"]["petsc_options"]}.items():
+            options[prefix + key] = value
+        self.ksp.setFromOptions()
+        self.ksp.setOperators(self.K)
+        if options.getString(prefix + "pc_type", "") == "gamg":
+            self.K.setNearNullSpace(self._near_nullspace())
+
+        self.n_owned = p.V.dofmap.index_map.size_local
+        self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
+        self.bc_dofs = p.support_dof_set
+        self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
+
+    def _near_nullspace(self) -> PETSc.NullSpace:
+        """Near-nullspace of elasticity (translations and rotations) for algebraic multigrid."""
+        p = self.problem
+        vectors = []
+        for mode in rigid_modes(self.coordinates):
+            vector = p.u.vector.copy()
+            vector.array_w[:] = mode.reshape(-1)
+            vectors.append(vector)
+        la.orthonormalize(vectors)
+        return PETSc.NullSpace().create(vectors=vectors, comm=p.mesh.comm)
+
+    # -- rigid-body modes of the current configuration ---------------------------------
+    def _arms(self) -> np.ndarray:
+        """x - x_ref for every owned node (current positions, mm)."""
+        p = self.problem
+        u = p.u.x.array[: self.n_owned * p.dim].reshape(-1, p.dim)
+        return self.coordinates + u - p.rigid.reference_point()
+
+    def _modes(self) -> list[np.ndarray]:
+        """Rigid-body test fields W (owned dofs): translations, then rotations e_k x (x - x_ref)."""
+        return [mode.reshape(-1) for mode in rigid_modes(self._arms())]
+
+    def _allsum(self, value):
+        return self.problem.mesh.comm.allreduce(value, op=MPI.SUM)
+
+    # -- residual ----------------------------------------------------------------------
+    def assemble_residual(self, load):
+        """Assemble R_u (Vec, support rows zeroed), R_r (numpy) and the force scale (N)."""
+        p = self.problem
+        for b, form in ((self.b_bulk, p.forms.residual_bulk), (self.b_contact, p.forms.residual_contact)):
+            with b.localForm() as local:
+                local.set(0.0)
+            petsc.assemble_vector(b, form)
+            if b is self.b_contact:
+                p.add_contact_residual(b)
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        contact = self.b_contact.array_r
+        G = np.array([self._allsum(float(mode @ contact)) for mode in self._modes()])
+        Q_ext = load.generalized_force(p.rigid.values)
+        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization @ (p.rigid.values - p.rigid.r_old.value)
+        R_u = self.b_bulk.copy()
+        R_u.axpy(1.0, self.b_contact)
+        petsc.set_bc(R_u, p.bcs, scale=0.0)
+        scale = max(self.b_bulk.norm(), np.linalg.norm(Q_ext), np.linalg.norm(G))
+        return R_u, R_r, scale
+
+    def norm(self, R_u, R_r) -> float:
+        free = self.problem.rigid.free
+        return float(np.sqrt(R_u.norm() ** 2 + np.sum(R_r[free] ** 2)))
+
+    # -- Newton --------------------------------------------------------------------------
+    def stabilize(self, factor: float) -> None:
+        """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm; rotations
+        scaled by the body size squared) tying the rigid body to its last converged pose.
+        `factor` scales it (0 = off). It gives a body with no contact yet a finite
+        stiffness, as Abaqus' contact stabilisation does; the stepper then removes it by
+        continuation (see Simulation.increment)."""
+        p = self.problem
+        k = float(p.constants["E"].value) * p.model.h_contact
+        size = p.shape["scale"]
+        scale = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size * size)
+        self.stabilization = factor * np.diag(k * scale)
+
+    def solve(self, load) -> int:
+        """Solve one increment; returns the Newton iterations taken."""
+        p, options = self.problem, self.problem.scene["solver"]
+        history = []
+        for iteration in range(options["max_iterations"] + 1):
+            R_u, R_r, scale = self.assemble_residual(load)
+            norm = self.norm(R_u, R_r)
+            history.append(norm)
+            if not np.isfinite(norm):
+                raise NewtonFailure("residual is not finite", history)
+            if norm <= options["atol"] + options["rtol"] * scale:
+                return iteration
+            if iteration == options["max_iterations"]:
+                break
+            du, dr = self.direction(load, R_u, R_r)
+            self.line_search(load, du, dr, norm, history)
+        raise NewtonFailure(f"no convergence in {options['max_iterations']} iterations", history)
+
+    def direction(self, load, R_u, R_r):
+        """Newton direction (du Vec, dr array) from the Schur complement."""
+        p = self.problem
+        n_r, free = len(p.rigid.names), p.rigid.free
+        self.K.zeroEntries()
+        petsc.assemble_matrix(self.K, p.forms.jacobian, bcs=p.bcs)
+        self.Kc.zeroEntries()
+        petsc.assemble_matrix(self.Kc, p.forms.jacobian_contact)
+        for b, form in zip(self.kur, p.forms.contact_dr):
+            with b.localForm() as local:
+                local.set(0.0)
+            petsc.assemble_vector(b, form)
+        p.add_contact_jacobian([self.K, self.Kc], self.kur, self.bc_dofs)
+        self.K.assemble()
+        self.Kc.assemble()
+        for b in self.kur:
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+
+        contact = self.b_contact.array_r.reshape(-1, p.dim)
+        modes = self._modes()
+        # dR_r/du rows: -(W^T Kc + C^T dW/du)
+        K_ru = []
+        axes = [2] if p.dim == 2 else [0, 1, 2]
+        for j, mode in enumerate(modes):
+            w, row = self.work[j], self.work[n_r + j]
+            w.array_w[:] = mode
+            self.Kc.multTranspose(w, row)
+            if j >= p.dim:
+                row.array_w[:] += cross_with_axis(contact, axes[j - p.dim]).reshape(-1)
+            row.scale(-1.0)
+            K_ru.append(row)
+        # dR_r/dr: -(W^T dC/dr + C^T dW/dr) - dQ_ext/dr + the effects' rigid stiffness
+        total_contact = np.array([self._allsum(contact[:, k].sum()) for k in range(p.dim)])
+        K_rr = np.zeros((n_r, n_r))
+        for j, mode in enumerate(modes):
+            for k in range(n_r):
+                K_rr[j, k] = -self._allsum(float(mode @ self.kur[k].array_r))
+        for j in range(p.dim, n_r):  # d(e_a x (x - x_ref))/dt = -e_a x dt
+            K_rr[j, : p.dim] += cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
+        K_rr += -load.generalized_force_jacobian(p.rigid.values) + p.rigid_stiffness(load) + self.stabilization
+
+        y, du = self.work[2 * n_r], self.work[2 * n_r + 1]
+        self._linear_solve(R_u, y)
+        X = []
+        for k in range(n_r):
+            rhs = self.work[2 * n_r + 2]
+            self.kur[k].copy(rhs)
+            petsc.set_bc(rhs, p.bcs, scale=0.0)
+            column = rhs.duplicate()
+            self._linear_solve(rhs, column)
+            X.append(column)
+        S = K_rr - np.array([[K_ru[i].dot(X[k]) for k in range(n_r)] for i in range(n_r)])
+        rhs_r = -R_r + np.array([K_ru[i].dot(y) for i in range(n_r)])
+        dr = np.zeros(n_r)
+        if free.any():
+            dr[free] = self._rigid_step(S[np.ix_(free, free)], rhs_r[free])
+        y.copy(du)
+        du.scale(-1.0)
+        for k in range(n_r):
+            du.axpy(-dr[k], X[k])
+        return du, dr
+
+    def _rigid_step(self, S_ff, rhs) -> np.ndarray:
+        """Solve S dr = rhs for the free rigid dofs inside a trust region.
+
+        A body out of contact has no stiffness: S is regularised by 1e-9 of its own scale
+        (or of E * size) and the step is capped at one contact element size h (rotations
+        at h / size), so a body that must travel to meet its partner gets there in steps
+        instead of leaping through it. The regularisation only shapes the step; the
+        converged state solves the unregularised equations."""
+        p = self.problem
+        size = p.shape["scale"]
+        scale = max(np.abs(np.diag(S_ff)).max(), float(p.constants["E"].value) * size)
+        dr = np.linalg.solve(S_ff + 1e-9 * scale * np.eye(len(rhs)), rhs)
+        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
+        cap = p.model.h_contact
+        return dr * min(1.0, cap / length) if length > 0 else dr
+
+    def _linear_solve(self, rhs, out) -> None:
+        self.ksp.solve(rhs, out)
+        if self.ksp.getConvergedReason() < 0:
+            raise NewtonFailure(f"linear solver failed (PETSc reason {self.ksp.getConvergedReason()})", [])
+        out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def line_search(self, load, du, dr, norm, history) -> None:
+        """Take the longest step of 1, 1/2, ... 1/4096 that lowers |R|; else the best found."""
+        p = self.problem
+        u0, r0 = p.u.vector.copy(), p.rigid.values.copy()
+        best = (np.inf, 1.0)
+        steps = [1.0] if not p.scene["solver"]["line_search"] else [2.0 ** -k for k in range(13)]
+        for alpha in steps:
+            self._update(u0, r0, du, dr, alpha)
+            if len(steps) == 1:
+                return
+            trial = self.norm(*self.assemble_residual(load)[:2])
+            if trial < (1 - 1e-4 * alpha) * norm:
+                return
+            best = min(best, (trial if np.isfinite(trial) else np.inf, alpha))
+        self._update(u0, r0, du, dr, best[1])
+
+    def _update(self, u0, r0, du, dr, alpha) -> None:
+        p = self.problem
+        u0.copy(p.u.vector)
+        p.u.vector.axpy(alpha, du)
+        p.u.x.scatter_forward()
+        p.rigid.values[:] = r0 + alpha * dr
+        p.rigid.sync()
+

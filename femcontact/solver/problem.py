@@ -1,0 +1,191 @@
+"""The discrete problem of a scene: unknowns, the effects' terms and the compiled forms.
+
+Like DOLFINx's `NonlinearProblem`, `Problem` owns the forms and exposes them (`forms`);
+the solver only assembles them. The residual of the deformable body is
+
+    R_u = sum(bulk terms) dx + sum(contact terms) ds_contact,   contact terms = -t . v + ...
+
+with the contact traction t summed from what the effects add. Effects are built in the
+order of `femcontact.effects.components_for`; `built` lists them, and only they exist:
+a frictionless quasi-static scene has no history state at all.
+"""
+from types import SimpleNamespace
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from femcontact.effects import components_for
+from femcontact.errors import InputError
+from femcontact.physics.rigid_body import RigidBody, mass_properties
+from femcontact.physics.rotation import rotation_numpy
+
+SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
+DEFORMABLE = {"peg": "hole", "hole": "peg", "indenter": "block"}
+"""The deformable body for each choice of rigid body."""
+
+
+class Problem:
+    """Unknowns, effects and forms of one scene on one mesh."""
+
+    def __init__(self, scene: dict, model):
+        self.scene, self.model = scene, model
+        self.mesh, self.dim = model.mesh, model.mesh.geometry.dim
+        self.effects = tuple(scene["effects"])
+        if not model.supports:
+            raise InputError(f"rigid = {scene['rigid']!r}: the deformable body has no support; "
+                             "hold it (e.g. make the peg the rigid body)")
+        self.deformable = DEFORMABLE[scene["rigid"]]
+        degree = scene["mesh"]["degree"]
+        self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", degree))
+        self.u = fem.Function(self.V, name="displacement")
+        self.v = ufl.TestFunction(self.V)
+        self.dx = ufl.Measure("dx", domain=self.mesh)
+        self.ds_contact = self._contact_measure(degree)
+        self.shape = self._shape_constants(model.rigid)
+        rigid_name = "peg" if scene["rigid"] == "peg" else scene["rigid"]
+        mass, moments = mass_properties(model.rigid, scene["materials"][rigid_name]["density"], self.dim)
+        if scene["rigid_body"]["mass"]:  # a given mass scales the moments of the uniform shape alike
+            moments = moments * scene["rigid_body"]["mass"] / mass if mass else moments
+            mass = scene["rigid_body"]["mass"]
+        self.rigid = RigidBody(self.mesh, model.rigid, scene["rigid_body"]["dofs"], mass, moments)
+        self.bcs = self._supports()
+
+        self._bulk, self._contact_terms, self._traction = [], [], []
+        self.components = components_for(self)
+        values = {}
+        for component in self.components:
+            values.update(component.constants(scene, self.deformable))
+        self.constants = {name: fem.Constant(self.mesh, float(value)) for name, value in values.items()}
+        for component in self.components:
+            component.build(self)
+        self.built = [component.name for component in self.components]
+        self.bulk = sum(self._bulk)
+        self.traction = sum(self._traction)
+        self.contact_integrand = sum([-ufl.dot(self.traction, self.v)] + self._contact_terms)
+        self.forms = self._compile()
+
+    # -- what effects call while they build ----------------------------------------------
+    def add_bulk(self, integrand) -> None:
+        """A term of R_u integrated over the deformable body (N/mm^3 . test function)."""
+        self._bulk.append(integrand * self.dx)
+
+    def add_traction(self, traction) -> None:
+        """A traction (MPa) the rigid body exerts on the contact surface."""
+        self._traction.append(traction)
+
+    def add_contact_term(self, integrand) -> None:
+        """A term of R_u integrated over the contact surface, beside -t . v."""
+        self._contact_terms.append(integrand)
+
+    # -- forms ---------------------------------------------------------------------------
+    def _compile(self) -> SimpleNamespace:
+        du = ufl.TrialFunction(self.V)
+        contact = self.contact_integrand * self.ds_contact
+        d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
+        return SimpleNamespace(
+            residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
+            jacobian=fem.form(ufl.derivative(self.bulk + contact, self.u, du)),
+            jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
+            contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])
+
+    def _contact_measure(self, degree: int):
+        """Contact terms use a fixed rule, so the residual and its derivatives integrate alike.
+        In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact: a
+        penetrating corner node is seen at once); basix has no such rule on triangles, so
+        3-D P1 uses the facet's vertices as a custom rule (the nodes also lie on the exact
+        curved surface, the facets' interior does not) and 3-D P2 Gauss points of degree 2p + 2."""
+        if self.dim == 2:
+            quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
+        elif degree == 1:
+            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1,
+                          "quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+                          "quadrature_weights": [1 / 6] * 3}
+        else:
+            quadrature = {"quadrature_degree": 2 * degree + 2}
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.model.facet_tags, metadata=quadrature)
+        return ds(tuple(self.model.facets[name] for name in self.model.contact_facets))
+
+    def _shape_constants(self, rigid: dict) -> dict:
+        """The rigid shape with its sizes as Constants, so sweeps reuse compiled forms."""
+        if rigid.get("chamfer_width", 0.0) > 0:
+            raise InputError(f"rigid = {self.scene['rigid']!r}: chamfers are meshed on the deformable body only; "
+                             "set the rigid body's chamfer_width = 0")
+        shape = dict(rigid)
+        for key in SHAPE_PARAMETERS:
+            if key in shape:
+                shape[key] = fem.Constant(self.mesh, float(shape[key]))
+        shape["scale"] = max(float(rigid.get(k, 0.0)) for k in SHAPE_PARAMETERS)
+        return shape
+
+    def _supports(self) -> list:
+        self.support_dofs = {}
+        bcs = []
+        for name in self.model.supports:
+            facets = self.model.facet_tags.find(self.model.facets[name])
+            dofs = fem.locate_dofs_topological(self.V, self.dim - 1, facets)
+            self.support_dofs[name] = dofs
+            bcs.append(fem.dirichletbc(np.zeros(self.dim, dtype=np.float64), dofs, self.V))
+        return bcs
+
+    @property
+    def support_dof_set(self) -> set:
+        """Local (unrolled) indices of all supported dofs."""
+        return {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
+
+    def local_coordinates(self) -> np.ndarray:
+        """Current position of every dof node in the rigid body's shape frame (numpy, mm)."""
+        x = self.V.tabulate_dof_coordinates()[:, : self.dim] + self.u.x.array.reshape(-1, self.dim)
+        t, angles = self.rigid.split(self.rigid.values)
+        R = rotation_numpy(angles) @ self.rigid.Q0
+        return (x - self.rigid.p0 - np.asarray(t)) @ R
+
+    # -- what the solver calls -----------------------------------------------------------
+    def rigid_residual(self, load) -> np.ndarray:
+        """The effects' terms of the rigid body's residual (N, N*mm)."""
+        terms = [c.rigid_residual(load) for c in self.components]
+        return sum((t for t in terms if t is not None), np.zeros(len(self.rigid.names)))
+
+    def rigid_stiffness(self, load) -> np.ndarray:
+        terms = [c.rigid_stiffness(load) for c in self.components]
+        return sum((t for t in terms if t is not None), np.zeros((len(self.rigid.names),) * 2))
+
+    def add_contact_residual(self, vector) -> None:
+        for component in self.components:
+            component.add_contact_residual(vector)
+
+    def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
+        for component in self.components:
+            component.add_contact_jacobian(matrices, kur, bc_dofs)
+
+    def load_scale(self) -> float:
+        """Largest load the effects apply themselves (N), e.g. the rigid body's weight."""
+        return max([c.load_scale() for c in self.components] + [0.0])
+
+    def begin_increment(self, load) -> None:
+        for component in self.components:
+            component.begin_increment(load)
+
+    def commit(self, dt: float) -> None:
+        """Accept the converged increment: each effect updates its history, then the pose."""
+        for component in self.components:
+            component.commit(dt)
+        self.rigid.commit()
+
+    def state(self) -> dict:
+        """Copy of everything an increment changes (to retry a cut increment, checkpoints)."""
+        state = {"u": self.u.x.array.copy(), "r": self.rigid.values.copy(), "r_old": self.rigid.r_old.value.copy()}
+        for component in self.components:
+            state.update({f"{component.name}.{key}": value for key, value in component.state().items()})
+        return state
+
+    def restore(self, state: dict) -> None:
+        self.u.x.array[:] = state["u"]
+        self.rigid.values[:] = state["r"]
+        self.rigid.r_old.value[:] = state["r_old"]
+        self.rigid.sync()
+        for component in self.components:
+            prefix = f"{component.name}."
+            own = {key[len(prefix):]: value for key, value in state.items() if key.startswith(prefix)}
+            if own:
+                component.restore(own)

@@ -1,0 +1,196 @@
+"""Step a contact scene through its loads: increments, cuts, checkpoints.
+
+An increment whose Newton iteration does not converge (`NewtonFailure`: too many
+iterations, a non-finite residual or a failed linear solve) is retried from the last
+converged state, first with the contact stabilisation's continuation, then halved, up
+to `solver.max_cuts` times; after a success it grows back. A run that still fails raises
+`SimulationFailed` naming the step, the time and the residual history. Any other
+exception is a fault, not non-convergence: it ends the run at once.
+Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
+(history file, progress).
+"""
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from femcontact.errors import InputError
+from femcontact.io import write_json_atomic
+
+STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
+"""Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
+STABILIZATION_TOLERANCE = 1e-3
+"""Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
+
+
+class SimulationFailed(RuntimeError):
+    """The solver gave up on an increment after cutting it `max_cuts` times."""
+
+
+def load_points(model) -> dict:
+    """Named points of the rigid body in its shape frame (about its reference point)."""
+    from femcontact.physics.signed_distance import reference_point
+
+    Q0, origin = np.asarray(model.rigid["rotation"]), np.asarray(model.rigid["origin"])
+    points = {name: Q0.T @ (np.asarray(x) - origin) - reference_point(model.rigid) for name, x in model.points.items()}
+    points["reference"] = np.zeros(len(origin))
+    return points
+
+
+class Simulation:
+    """A scene's problem, solver, schedule and the history of its increments."""
+
+    def __init__(self, scene: dict, comm=MPI.COMM_WORLD, listeners=()):
+        from femcontact.outputs.recorder import Recorder
+        from femcontact.solver.loading import Schedule
+        from femcontact.solver.newton import SchurNewton
+        from femcontact.solver.problem import Problem
+        from geometry.model import build
+
+        self.scene, self.timings, self.listeners = scene, {}, list(listeners)
+        start = time.perf_counter()
+        self.model = build(scene, comm)
+        self.timings["mesh"] = time.perf_counter() - start
+        start = time.perf_counter()
+        self.problem = Problem(scene, self.model)
+        self.newton = SchurNewton(self.problem)
+        self.recorder = Recorder(self.problem, self.newton)
+        self.timings["forms"] = time.perf_counter() - start
+        self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model))
+        self.history: list[dict] = []
+        size = self.problem.shape["scale"]
+        self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
+                              for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
+        self.stabilized_increments = 0
+        self.stabilization_force = 0.0
+        self.timings["solve"] = 0.0
+        self.timings["output"] = 0.0
+
+    @property
+    def dofs(self) -> int:
+        V = self.problem.V
+        return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+
+    def run(self, first_step: int = 0) -> list[dict]:
+        for index, step in enumerate(self.scene["steps"][first_step:], start=first_step):
+            self.run_step(index, step)
+        return self.history
+
+    # -- checkpoints: a study's shared prefix is computed once --------------------------------
+    def save_checkpoint(self, directory: Path) -> None:
+        """Write this rank's state after the steps run so far (restart needs the same ranks)."""
+        comm = self.problem.mesh.comm
+        directory = Path(directory)
+        if comm.rank == 0:
+            directory.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        np.savez(directory / f"rank{comm.rank}.npz", **self.problem.state())
+        if comm.rank == 0:
+            write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
+                                                              "history": self.history})
+
+    def load_checkpoint(self, directory: Path) -> int:
+        """Restore a checkpoint; returns the number of steps it holds."""
+        comm = self.problem.mesh.comm
+        meta = json.loads((Path(directory) / "checkpoint.json").read_text())
+        if meta["ranks"] != comm.size:
+            raise InputError(f"--restart {directory}: written on {meta['ranks']} ranks, run on {comm.size}")
+        self.problem.restore(dict(np.load(Path(directory) / f"rank{comm.rank}.npz")))
+        for row in meta["history"]:
+            self._record(row)
+        return meta["steps"]
+
+    def _record(self, row: dict, cuts: int = 0) -> None:
+        self.history.append(row)
+        for listener in self.listeners:
+            listener(row, cuts)
+
+    def run_step(self, index: int, step: dict) -> None:
+        """Advance through one step with adaptive increments."""
+        from femcontact.solver.newton import NewtonFailure
+
+        nominal = step["duration"] / step["increments"]
+        t, dt, cuts = 0.0, nominal, 0
+        max_cuts = self.scene["solver"]["max_cuts"]
+        while t < step["duration"] * (1 - 1e-12):
+            dt = min(dt, step["duration"] - t)
+            load = self.schedule.load(index, t + dt, dt)
+            try:
+                row = self.increment(load)
+            except NewtonFailure as error:
+                if cuts >= max_cuts:
+                    raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
+                                           f"after {cuts} cuts: {error}") from None
+                cuts += 1
+                dt /= 2
+                continue
+            self._record(row, cuts)
+            t += dt
+            if cuts and row["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
+                dt, cuts = min(2 * dt, nominal), cuts - 1
+
+    def increment(self, load) -> dict:
+        """Solve one increment from the last converged state (restored on any failure);
+        returns its output row, computed before the history moves on."""
+        from femcontact.solver.newton import NewtonFailure
+
+        p = self.problem
+        state = p.state()
+        p.begin_increment(load)
+        start = time.perf_counter()
+        try:
+            self._prescribe(load)
+            self.stabilization_force = 0.0
+            try:
+                iterations = self.newton.solve(load)
+            except NewtonFailure:
+                p.restore(state)
+                self._prescribe(load)
+                iterations = self.stabilized_solve(load)
+        except BaseException:
+            p.restore(state)
+            raise
+        finally:
+            self.timings["solve"] += time.perf_counter() - start
+        start = time.perf_counter()
+        row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
+        self.timings["output"] += time.perf_counter() - start
+        p.commit(load.dt)
+        return row
+
+    def _prescribe(self, load) -> None:
+        rigid = self.problem.rigid
+        rigid.values[~rigid.free] = load.motion[~rigid.free]
+        rigid.sync()
+
+    def stabilized_solve(self, load) -> int:
+        """Continuation in the contact stabilisation down to zero. If the exact equations
+        (last factor) still fail, as for a body left in neutral equilibrium with vanishing
+        contact forces, the solution of the smallest factor that converged is kept and its
+        stabilisation force (N) is reported in the history."""
+        from femcontact.solver.newton import NewtonFailure
+
+        p, iterations, accepted = self.problem, 0, None
+        self.stabilized_increments += 1
+        try:
+            for factor in STABILIZATION_FACTORS:
+                self.newton.stabilize(factor)
+                try:
+                    iterations += self.newton.solve(load)
+                except NewtonFailure:
+                    if accepted is None or self.stabilization_force > STABILIZATION_TOLERANCE * self.peak_load:
+                        raise
+                    p.restore(accepted)
+                    break
+                accepted = p.state()
+                force = self.newton.stabilization @ (p.rigid.values - p.rigid.r_old.value)
+                self.stabilization_force = float(np.linalg.norm(force[: p.dim]))
+        finally:
+            self.newton.stabilize(0.0)
+        return iterations
+
+    def step_end_rows(self) -> dict:
+        """The last row of every step, by step name."""
+        return {row["step"]: row for row in self.history}

@@ -1,0 +1,1 @@
+"""Studies: the study file, the runner, the results database and the report."""

@@ -1,0 +1,615 @@
+"""`femcontact study STUDY.toml`: expand a sweep into cases and run the ones not done yet.
+
+A study file names a base scene, inline overrides and a sweep (a grid, zipped
+lists and explicit cases, over dotted scene keys such as `steps.1.force`). Every
+case is resolved and validated before anything runs; its id is the hash of its
+resolved scene (`femcontact.scene.case_id`), so re-running a study finds its
+finished cases again: a case is done iff `results/NAME/cases/ID/result.json`
+exists (written atomically by `femcontact run`, or by this runner for a case
+that timed out or crashed without one).
+
+Cases run as subprocesses through the study's launcher (`mpirun -n {ranks}` by
+default, `srun -n {ranks}` under SLURM), `jobs` at a time. Each job slot has its
+own FFCx JIT cache (`XDG_CACHE_HOME`), so concurrent first compilations never
+contend for the same cache locks. See docs/studies.md.
+"""
+import ctypes
+import functools
+import itertools
+import json
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from femcontact.errors import InputError
+from femcontact.io import write_json_atomic
+from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+from femcontact.config.scene import case_id, read_toml, resolve
+
+_TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
+_TABLES = Field("any", [], "an array of tables",
+                check=lambda v: None if isinstance(v, list) and all(isinstance(t, dict) for t in v)
+                else "must be an array of tables")
+
+SCHEMA = {
+    "study": {
+        "name": Field("str", doc="study name: results go to results/NAME/",
+                      check=lambda v: None if v and "/" not in v and not v.startswith(".") else "not a plain name"),
+        "description": Field("str", "", "what the study is for"),
+        "scene": Field("str", doc="base scene file, relative to the study file"),
+        "jobs": Field("int", 0, "cases run at once; 0 = cores // ranks_per_case", min=0),
+        "ranks_per_case": Field("int", 1, "MPI ranks per case", min=1),
+        "time_limit": Field("float", 600.0, "seconds per case; a case past it is killed and recorded failed",
+                            positive=True),
+        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks"),
+        "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
+    },
+    "scene": _TABLE,
+    "sweep": {
+        "grid": Field("any", {}, "key = [values]: every combination", check=lambda v: _check_lists(v, False)),
+        "zip": Field("any", {}, "key = [values]: lists of one length, taken together",
+                     check=lambda v: _check_lists(v, True)),
+        "cases": _TABLES,
+    },
+    "plot": TableList({
+        "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
+        "y": Field("str", doc="column on the y axis"),
+        "series": Field("str", "", "column whose values make separate curves"),
+        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds)",
+                      choices=("line", "scatter", "wedge_map")),
+        "logx": Field("bool", False, "logarithmic x axis"),
+        "logy": Field("bool", False, "logarithmic y axis"),
+        "title": Field("str", "", "plot title"),
+        "file": Field("str", "", "PNG file name in results/NAME/ (default Y_vs_X.png)"),
+    }, "plots written by `femcontact report`", default=[]),
+    "snapshots": {
+        "select": _TABLES,
+        "field": Field("str", "von_mises", "field shown", choices=("von_mises",)),
+        "zoom": Field("any", "", "named point of the fields file, or [x, y(, z), radius]",
+                      check=lambda v: None if isinstance(v, str) or (
+                          isinstance(v, list) and len(v) in (3, 4) and all(isinstance(x, (int, float)) for x in v))
+                      else "expected a name or [x, y(, z), radius]"),
+        "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
+        "scale": Field("float", 1.0, "displacement magnification", min=0.0),
+    },
+    "report": {
+        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
+                         "default: swept keys, status, the family's primary metrics, wall time)",
+                         check=lambda v: _check_columns(v)),
+    },
+}
+MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
+
+
+def _check_columns(columns: list[str]) -> str | None:
+    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
+    if bad:
+        return f"column {bad[0]!r} is empty or repeated"
+    if len(columns) > MAX_COLUMNS:
+        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
+    return None
+
+
+def flatten(table: dict, prefix: str = "") -> dict:
+    """{'peg': {'width': 1}} -> {'peg.width': 1} (TOML turns unquoted dotted keys into sub-tables)."""
+    flat = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            flat.update(flatten(value, f"{prefix}{key}."))
+        else:
+            flat[prefix + key] = value
+    return flat
+
+
+def _check_lists(table, same_length: bool) -> str | None:
+    if not isinstance(table, dict):
+        return "must be a table of key = [values]"
+    lists = flatten(table)
+    bad = [key for key, values in lists.items() if not isinstance(values, list) or not values]
+    if bad:
+        return f"{bad[0]} must be a non-empty list of values"
+    if same_length and len({len(values) for values in lists.values()}) > 1:
+        return "zipped lists must have one length: " + ", ".join(f"{k} has {len(v)}" for k, v in lists.items())
+    return None
+
+
+@dataclass
+class Case:
+    """One case of a study: its swept parameters, resolved scene and directory."""
+    params: dict
+    scene: dict
+    id: str
+    dir: Path
+    prefix: "Case | None" = None  # the shared-prefix computation it restarts from
+
+    @property
+    def is_prefix(self) -> bool:
+        """A shared prefix (results/NAME/prefix/ID), not a case of the study."""
+        return self.dir.parent.name == "prefix"
+
+
+@dataclass
+class Study:
+    """A loaded study: settings, cases (in sweep order), swept keys and result paths."""
+    path: Path
+    settings: dict
+    cases: list[Case]
+    keys: list[str]
+    results: Path
+    plots: list = field(default_factory=list)
+    snapshots: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
+
+    @property
+    def database(self) -> Path:
+        return self.results / "results.sqlite"
+
+
+def get_key(scene: dict, dotted: str):
+    """scene['a'][1]['b'] for 'a.1.b'; None when absent."""
+    node = scene
+    for part in dotted.split("."):
+        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            return None
+    return node
+
+
+def expand(sweep: dict) -> list[dict]:
+    """Parameter sets of a sweep: grid (product) x zip (together), then the explicit cases.
+
+    An empty sweep is the base scene alone."""
+    grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
+    explicit = [flatten(case) for case in sweep.get("cases", [])]
+    if not grid and not zipped:
+        return explicit or [{}]
+    grid_sets = [dict(zip(grid, values)) for values in itertools.product(*grid.values())]
+    zip_sets = [dict(zip(zipped, values)) for values in zip(*zipped.values())] or [{}]
+    return [{**g, **z} for g in grid_sets for z in zip_sets] + explicit
+
+
+def load_study(path, overrides=(), results_root="results") -> Study:
+    """Read and validate a study file and resolve every case; raises InputError naming bad cases."""
+    path = Path(path)
+    try:
+        raw = validate(read_toml(path), SCHEMA)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+    settings = raw["study"]
+    base = read_toml(path.parent / settings["scene"])
+    for key, value in flatten(raw["scene"]).items():
+        set_key(base, key, value)
+    for text in overrides:  # --set changes the base scene; the sweep still varies its own keys
+        set_key(base, *parse_assignment(text))
+    results = Path(results_root) / settings["name"]
+    cases, problems, seen = [], [], set()
+    for params in expand(raw["sweep"]):
+        data = json.loads(json.dumps(base))
+        try:
+            for key, value in params.items():
+                set_key(data, key, value)
+            scene = resolve(data)
+        except InputError as error:
+            problems.append(f"case {_describe(params)}: {error}")
+            continue
+        identity = case_id(scene)
+        if identity not in seen:
+            seen.add(identity)
+            cases.append(Case(params, scene, identity, results / "cases" / identity))
+    if problems:
+        raise InputError(f"{path}: {len(problems)} invalid case(s), nothing was run:\n  " + "\n  ".join(problems))
+    keys = list(dict.fromkeys(key for case in cases for key in case.params))
+    for case in cases:
+        case.params = {key: get_key(case.scene, key) for key in keys}
+    if settings["shared_steps"]:
+        _attach_prefixes(cases, settings["shared_steps"], results)
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
+
+
+def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
+    """Give every case with more than `shared` steps the prefix case it restarts from."""
+    prefixes = {}
+    for case in cases:
+        if len(case.scene["steps"]) <= shared:
+            continue
+        scene = {**case.scene, "steps": case.scene["steps"][:shared]}
+        identity = case_id(scene)
+        if identity not in prefixes:
+            prefixes[identity] = Case({}, scene, identity, results / "prefix" / identity)
+        case.prefix = prefixes[identity]
+
+
+def _describe(params: dict) -> str:
+    return ", ".join(f"{key}={value!r}" for key, value in params.items()) or "(base scene)"
+
+
+# -- the case directory ---------------------------------------------------------------------------
+
+def read_result(case_dir: Path) -> dict | None:
+    """The case's result, or None when it has none (not run, or interrupted)."""
+    try:
+        return json.loads((case_dir / "result.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        return None
+
+
+def to_toml(scene: dict) -> str:
+    """TOML text of a resolved scene: scalars, then [tables], then [[arrays of tables]]."""
+    lines = [f"{_key(k)} = {_value(v)}" for k, v in scene.items() if not _is_table(v) and not _is_tables(v)]
+    for key, value in scene.items():
+        if _is_table(value):
+            lines += ["", f"[{_key(key)}]"] + _table_lines(value)
+    for key, value in scene.items():
+        if _is_tables(value):
+            for item in value:
+                lines += ["", f"[[{_key(key)}]]"] + _table_lines(item)
+    return "\n".join(lines) + "\n"
+
+
+def _is_table(value) -> bool:
+    return isinstance(value, dict) and bool(value)
+
+
+def _is_tables(value) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def _table_lines(table: dict, prefix: str = "") -> list[str]:
+    lines = []
+    for key, value in table.items():
+        if _is_table(value):
+            lines += _table_lines(value, f"{prefix}{_key(key)}.")
+        else:
+            lines.append(f"{prefix}{_key(key)} = {_value(value)}")
+    return lines
+
+
+def _key(key: str) -> str:
+    return key if key and all(c.isalnum() or c in "_-" for c in key) else json.dumps(key)
+
+
+def _value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(map(_value, value)) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + "}"
+    raise TypeError(f"cannot write {value!r} as TOML")
+
+
+def provenance() -> dict:
+    """Software versions and git commit of the code that runs the cases (recorded per case)."""
+    from importlib import metadata
+
+    versions = {"python": sys.version.split()[0]}
+    for name, dist in (("dolfinx", "fenics-dolfinx"), ("petsc4py", "petsc4py"), ("numpy", "numpy"),
+                       ("mpi4py", "mpi4py")):
+        try:
+            versions[name] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    repo = Path(__file__).resolve().parent.parent
+    git = subprocess.run(["git", "-C", str(repo), "describe", "--always", "--dirty", "--abbrev=40"],
+                         capture_output=True, text=True)
+    versions["git_commit"] = git.stdout.strip() if git.returncode == 0 else None
+    return versions
+
+
+# -- running --------------------------------------------------------------------------------------
+
+@dataclass
+class Job:
+    """A running case (or shared prefix) and its job slot."""
+    case: Case
+    process: subprocess.Popen
+    slot: int
+    started: float
+    killed: str | None = None
+
+
+def _die_with_parent(parent: int) -> None:
+    """In the child: get SIGTERM when the runner dies, even by SIGKILL (Linux prctl PR_SET_PDEATHSIG)."""
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+def femcontact_command() -> list[str]:
+    """The `femcontact` executable of this environment."""
+    script = Path(sys.executable).parent / "femcontact"
+    return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
+
+
+def remove_unfinished_compilations(cache_root: Path) -> None:
+    """Delete JIT sources whose compiled module is missing: a case killed while compiling
+    leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
+    here: the runner holds the study lock and its job slots' caches are its own."""
+    for source in cache_root.glob("slot-*/fenics/*.c"):
+        if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
+            source.unlink(missing_ok=True)
+
+
+class Runner:
+    """Runs cases `jobs` at a time, enforcing the time limit and recording each result."""
+
+    def __init__(self, study: Study, jobs: int, ranks: int, database, progress):
+        self.study, self.jobs, self.ranks = study, jobs, ranks
+        self.database, self.progress = database, progress
+        self.provenance = provenance()
+        cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+        self.cache_root = cache / "femcontact-jit"
+        self.running: list[Job] = []
+        remove_unfinished_compilations(self.cache_root)
+
+    def command(self, case: Case) -> list[str]:
+        launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))
+        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", "."]
+        if case.prefix is not None:
+            command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+        elif case.is_prefix:
+            command += ["--checkpoint"]
+        return command
+
+    def start(self, case: Case, slot: int) -> None:
+        case.dir.mkdir(parents=True, exist_ok=True)
+        (case.dir / "result.json").unlink(missing_ok=True)
+        (case.dir / "scene.toml").write_text(to_toml(case.scene))
+        command = self.command(case)
+        write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
+                                               "slot": slot, "started": time.time()})
+        env = {**os.environ, "XDG_CACHE_HOME": str(self.cache_root / f"slot-{slot}"), "PYTHONUNBUFFERED": "1"}
+        env.setdefault("OMP_NUM_THREADS", "1")
+        with open(case.dir / "log.txt", "wb") as log:
+            process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT, env=env,
+                                       stdin=subprocess.DEVNULL, start_new_session=True,
+                                       preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+        self.running.append(Job(case, process, slot, time.monotonic()))
+
+    def poll(self) -> list[tuple[Case, dict]]:
+        """Reap finished jobs (killing those past the time limit); returns (case, result) pairs."""
+        finished, limit = [], self.study.settings["time_limit"]
+        for job in list(self.running):
+            elapsed = time.monotonic() - job.started
+            if job.process.poll() is None:
+                if elapsed > limit and not job.killed:
+                    job.killed = f"time limit of {limit:g} s exceeded"
+                    _signal_group(job.process, signal.SIGTERM)
+                elif job.killed and elapsed > limit + 5:
+                    _signal_group(job.process, signal.SIGKILL)
+                continue
+            self.running.remove(job)
+            result = read_result(job.case.dir) if not job.killed else None
+            if result is None:  # killed, crashed or exited without a result: the runner records why
+                reason = job.killed or _exit_reason(job.process.returncode, job.case.dir / "log.txt")
+                result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
+                          "info": {"ranks": self.ranks}}
+                write_json_atomic(job.case.dir / "result.json", result)
+            runner = json.loads((job.case.dir / "runner.json").read_text())
+            write_json_atomic(job.case.dir / "runner.json", {**runner, "wall": elapsed})
+            finished.append((job.case, result))
+        return finished
+
+    def stop_all(self) -> None:
+        """Terminate every running job (their results stay missing, so they rerun next time)."""
+        for job in self.running:
+            _signal_group(job.process, signal.SIGTERM)
+        deadline = time.monotonic() + 5
+        for job in self.running:
+            try:
+                job.process.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                _signal_group(job.process, signal.SIGKILL)
+                job.process.wait()
+        self.running.clear()
+
+    def run(self, cases: list[Case], prefixes: list[Case]) -> None:
+        """Run the prefixes and cases; a case whose prefix failed is recorded failed without running."""
+        pending = prefixes + cases
+        running_prefixes = {prefix.id for prefix in prefixes}
+        prefix_results = {case.prefix.id: read_result(case.prefix.dir) for case in cases
+                          if case.prefix is not None and case.prefix.id not in running_prefixes}
+        while pending or self.running:
+            free = sorted(set(range(self.jobs)) - {job.slot for job in self.running})
+            for case in list(pending):
+                if not free:
+                    break
+                if case.prefix is not None and case.prefix.id not in prefix_results:
+                    continue  # waits for its prefix
+                pending.remove(case)
+                prefix = prefix_results.get(case.prefix.id) if case.prefix else None
+                if prefix is not None and prefix["status"] != "ok":
+                    result = {"status": "failed", "reason": f"shared prefix {case.prefix.id} failed: "
+                              f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
+                    case.dir.mkdir(parents=True, exist_ok=True)
+                    (case.dir / "scene.toml").write_text(to_toml(case.scene))
+                    write_json_atomic(case.dir / "runner.json", self.provenance)
+                    write_json_atomic(case.dir / "result.json", result)
+                    self._finish(case, result)
+                    continue
+                self.start(case, free.pop(0))
+                self.progress.update(self.running)
+            for case, result in self.poll():
+                if case.is_prefix:
+                    prefix_results[case.id] = result
+                    self.progress.finished(case, result, prefix=True)
+                else:
+                    self._finish(case, result)
+            self.progress.update(self.running)
+            time.sleep(0.02)
+
+    def _finish(self, case: Case, result: dict) -> None:
+        self.database.record(case)
+        self.progress.finished(case, result)
+
+
+def _signal_group(process: subprocess.Popen, sig: int) -> None:
+    try:
+        os.killpg(process.pid, sig)
+    except ProcessLookupError:
+        pass
+
+
+def _exit_reason(code: int, log: Path) -> str:
+    how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
+    lines = [line for line in log.read_text(errors="replace").splitlines() if line.strip()] if log.exists() else []
+    return f"{how} without a result" + (f"; last log line: {lines[-1].strip()[:300]}" if lines else "")
+
+
+# -- progress -------------------------------------------------------------------------------------
+
+class Progress:
+    """On a terminal a progress bar (and a line per failure), otherwise a line per finished case;
+    nothing with --quiet."""
+
+    def __init__(self, total: int, quiet: bool, stream=sys.stderr):
+        self.total, self.quiet, self.stream = total, quiet, stream
+        self.bar = not quiet and stream.isatty()
+        self.done = self.failed = 0
+        self.start = time.monotonic()
+        self.drawn = 0.0
+
+    def finished(self, case: Case, result: dict, prefix: bool = False) -> None:
+        if not prefix:
+            self.done += 1
+            self.failed += result["status"] != "ok"
+        if self.quiet or (self.bar and result["status"] == "ok"):
+            return
+        what = f"prefix {case.id}" if prefix else f"{case.id} {_describe(case.params)}"
+        line = f"[{self.done}/{self.total}] {result['status']:6s} {what}"
+        if result["status"] != "ok":
+            line += f": {result['reason']}"
+        self._clear()
+        print(line, file=self.stream, flush=True)
+        self.drawn = 0.0
+
+    def update(self, running: list[Job]) -> None:
+        now = time.monotonic()
+        if not self.bar or now - self.drawn < 0.2:
+            return
+        self.drawn = now
+        elapsed = now - self.start
+        eta = f"{_duration(elapsed / self.done * (self.total - self.done))}" if self.done else "?"
+        filled = int(30 * self.done / max(self.total, 1))
+        self.stream.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} done, "
+                          f"{self.failed} failed, {len(running)} running, {_duration(elapsed)} elapsed, "
+                          f"ETA {eta}\x1b[K")
+        self.stream.flush()
+
+    def close(self) -> None:
+        """Leave the terminal's last line free for the summary."""
+        self._clear()
+
+    def _clear(self) -> None:
+        if self.bar:
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(seconds)
+    return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m" if seconds >= 3600 else \
+        f"{seconds // 60}m{seconds % 60:02d}s" if seconds >= 60 else f"{seconds}s"
+
+
+# -- the command ----------------------------------------------------------------------------------
+
+def add_arguments(parser):
+    parser.add_argument("study", help="study file (TOML)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a value of the base scene for every case")
+    parser.add_argument("--jobs", type=int, default=None, help="cases at once (default: the study's jobs)")
+    parser.add_argument("--ranks-per-case", type=int, default=None, help="MPI ranks per case")
+    parser.add_argument("--retry-failed", action="store_true", help="rerun cases that failed")
+    parser.add_argument("--force", action="store_true", help="rerun every case")
+    parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary")
+    parser.add_argument("--results", default="results", help="results root (default: results)")
+    parser.add_argument("--list", action="store_true", help="list the cases and their state, run nothing")
+
+
+def command(args) -> int:
+    import fcntl
+
+    from femcontact.study.database import Database
+
+    study = load_study(args.study, args.set, args.results)
+    settings = study.settings
+    ranks = args.ranks_per_case or settings["ranks_per_case"]
+    jobs = args.jobs if args.jobs is not None else settings["jobs"]
+    if jobs < 0 or ranks < 1:
+        raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
+    jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
+    study.results.mkdir(parents=True, exist_ok=True)
+    lock = open(study.results / ".lock", "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
+
+    database = Database(study.database, study.keys)
+    database.rebuild(study.cases)  # the case directories are the truth
+    if args.list:
+        return _list(study)
+    todo = [case for case in study.cases if _needs_run(case, args)]
+    prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
+                     and (args.force or (read_result(case.prefix.dir) or {}).get("status") != "ok")}.values())
+    if not args.quiet:
+        print(f"study {settings['name']}: {len(study.cases)} cases, {len(study.cases) - len(todo)} done, "
+              f"{len(todo)} to run" + (f" (+{len(prefixes)} shared prefixes)" if prefixes else "")
+              + f", {jobs} at a time x {ranks} rank(s)", file=sys.stderr)
+    progress = Progress(len(todo), args.quiet)
+    runner = Runner(study, jobs, ranks, database, progress)
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        runner.run(todo, prefixes)
+    except KeyboardInterrupt:
+        progress.close()
+        runner.stop_all()
+        database.export_csv(study.results / "results.csv")
+        print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
+              "run the same command again to continue", file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    progress.close()
+    database.export_csv(study.results / "results.csv")
+    return _summary(study, progress.start)
+
+
+def _needs_run(case: Case, args) -> bool:
+    result = read_result(case.dir)
+    return args.force or result is None or (args.retry_failed and result["status"] != "ok")
+
+
+def _raise_interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _list(study: Study) -> int:
+    for case in study.cases:
+        result = read_result(case.dir)
+        print(f"{case.id}  {result['status'] if result else 'todo':6s}  {_describe(case.params)}")
+    return 0
+
+
+def _summary(study: Study, start: float) -> int:
+    results = [(case, read_result(case.dir)) for case in study.cases]
+    failed = [(case, result) for case, result in results if result["status"] != "ok"]
+    print(f"study {study.settings['name']}: {len(results)} cases, {len(results) - len(failed)} ok, "
+          f"{len(failed)} failed ({time.monotonic() - start:.1f} s)")
+    for case, result in failed:
+        print(f"  failed {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
+    print(f"results: {study.database} and {study.results / 'results.csv'}; cases in {study.results / 'cases'}/")
+    return 1 if failed else 0
