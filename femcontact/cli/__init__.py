@@ -13,9 +13,10 @@ from femcontact.errors import InputError
 
 COMMANDS = {
     "run": ("femcontact.cli.run", "run one scene and write its results"),
-    "study": ("femcontact.study.runner", "run the cases of a study that are not done yet"),
+    "study": ("femcontact.study.command", "run the cases of a study that are not done yet"),
     "report": ("femcontact.study.report", "write the plots, snapshots and summary of a study"),
     "rcc": ("femcontact.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
+    "whitney": ("femcontact.cli.whitney", "compliantly supported rigid-peg insertion (Whitney), analytic"),
 }
 
 

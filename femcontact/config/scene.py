@@ -11,6 +11,7 @@ import json
 import tomllib
 from pathlib import Path
 
+from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 
@@ -133,6 +134,9 @@ def contact_schema(dim: int, geometry: str) -> dict:
     """Schema of a contact scene for the given dimension and geometry."""
     schema = {
         "kind": Field("str", "contact", choices=("contact", "rcc")),
+        "accuracy": Field("str", "custom", "preset of mesh and solver keys the scene leaves unset "
+                          "(docs/accuracy.md): 'fast', 'balanced', 'accurate', or 'custom' (none)",
+                          choices=tuple(PRESETS)),
         "name": Field("str", "scene", "scene name"),
         "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
         "geometry": Field("str", "peg_in_hole", "'peg_in_hole' or 'block' (a block under a rigid indenter)",
@@ -202,6 +206,8 @@ def resolve(data: dict, overrides=()) -> dict:
         raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc'")
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
                     {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
+    if isinstance(data.get("accuracy"), str):
+        apply_preset(data)
     scene = validate(data, contact_schema(head["dim"], head["geometry"]))
     _check_contact(scene)
     return scene

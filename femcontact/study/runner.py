@@ -333,13 +333,24 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
 
 
-def remove_unfinished_compilations(cache_root: Path) -> None:
+def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
     """Delete JIT sources whose compiled module is missing: a case killed while compiling
     leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
-    here: the runner holds the study lock and its job slots' caches are its own."""
-    for source in cache_root.glob("slot-*/fenics/*.c"):
+    here: the runner holds the study lock and its job slots' caches are its own (a SLURM
+    task cleans only the slot it holds)."""
+    for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+
+
+def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
+    """The command that runs `case` in its directory: LAUNCHER FEMCONTACT run scene.toml ..."""
+    command = shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + ["run", "scene.toml", "--out", "."]
+    if case.prefix is not None:
+        command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+    elif case.is_prefix:
+        command += ["--checkpoint"]
+    return command
 
 
 class Runner:
@@ -355,13 +366,7 @@ class Runner:
         remove_unfinished_compilations(self.cache_root)
 
     def command(self, case: Case) -> list[str]:
-        launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))
-        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", "."]
-        if case.prefix is not None:
-            command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
-        elif case.is_prefix:
-            command += ["--checkpoint"]
-        return command
+        return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
         case.dir.mkdir(parents=True, exist_ok=True)
@@ -522,94 +527,3 @@ def _duration(seconds: float) -> str:
     seconds = int(seconds)
     return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m" if seconds >= 3600 else \
         f"{seconds // 60}m{seconds % 60:02d}s" if seconds >= 60 else f"{seconds}s"
-
-
-# -- the command ----------------------------------------------------------------------------------
-
-def add_arguments(parser):
-    parser.add_argument("study", help="study file (TOML)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a value of the base scene for every case")
-    parser.add_argument("--jobs", type=int, default=None, help="cases at once (default: the study's jobs)")
-    parser.add_argument("--ranks-per-case", type=int, default=None, help="MPI ranks per case")
-    parser.add_argument("--retry-failed", action="store_true", help="rerun cases that failed")
-    parser.add_argument("--force", action="store_true", help="rerun every case")
-    parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary")
-    parser.add_argument("--results", default="results", help="results root (default: results)")
-    parser.add_argument("--list", action="store_true", help="list the cases and their state, run nothing")
-
-
-def command(args) -> int:
-    import fcntl
-
-    from femcontact.study.database import Database
-
-    study = load_study(args.study, args.set, args.results)
-    settings = study.settings
-    ranks = args.ranks_per_case or settings["ranks_per_case"]
-    jobs = args.jobs if args.jobs is not None else settings["jobs"]
-    if jobs < 0 or ranks < 1:
-        raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
-    jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
-    study.results.mkdir(parents=True, exist_ok=True)
-    lock = open(study.results / ".lock", "w")
-    try:
-        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
-
-    database = Database(study.database, study.keys)
-    database.rebuild(study.cases)  # the case directories are the truth
-    if args.list:
-        return _list(study)
-    todo = [case for case in study.cases if _needs_run(case, args)]
-    prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
-                     and (args.force or (read_result(case.prefix.dir) or {}).get("status") != "ok")}.values())
-    if not args.quiet:
-        print(f"study {settings['name']}: {len(study.cases)} cases, {len(study.cases) - len(todo)} done, "
-              f"{len(todo)} to run" + (f" (+{len(prefixes)} shared prefixes)" if prefixes else "")
-              + f", {jobs} at a time x {ranks} rank(s)", file=sys.stderr)
-    progress = Progress(len(todo), args.quiet)
-    runner = Runner(study, jobs, ranks, database, progress)
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
-    try:
-        runner.run(todo, prefixes)
-    except KeyboardInterrupt:
-        progress.close()
-        runner.stop_all()
-        database.export_csv(study.results / "results.csv")
-        print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
-              "run the same command again to continue", file=sys.stderr)
-        return 130
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-    progress.close()
-    database.export_csv(study.results / "results.csv")
-    return _summary(study, progress.start)
-
-
-def _needs_run(case: Case, args) -> bool:
-    result = read_result(case.dir)
-    return args.force or result is None or (args.retry_failed and result["status"] != "ok")
-
-
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt
-
-
-def _list(study: Study) -> int:
-    for case in study.cases:
-        result = read_result(case.dir)
-        print(f"{case.id}  {result['status'] if result else 'todo':6s}  {_describe(case.params)}")
-    return 0
-
-
-def _summary(study: Study, start: float) -> int:
-    results = [(case, read_result(case.dir)) for case in study.cases]
-    failed = [(case, result) for case, result in results if result["status"] != "ok"]
-    print(f"study {study.settings['name']}: {len(results)} cases, {len(results) - len(failed)} ok, "
-          f"{len(failed)} failed ({time.monotonic() - start:.1f} s)")
-    for case, result in failed:
-        print(f"  failed {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
-    print(f"results: {study.database} and {study.results / 'results.csv'}; cases in {study.results / 'cases'}/")
-    return 1 if failed else 0
