@@ -349,6 +349,7 @@ def test_plot_lines_join_only_cases_differing_in_x():
     scatter = curves({**spec, "kind": "scatter", "series": "b"}, rows, ["a", "b", "c"])
     assert [(line["label"], len(line["points"]), line["joined"]) for line in scatter] == \
         [("reference: b = 1", 5, False), ("b = 2", 4, False)]
+    assert curves(spec, [], ["a", "b", "c"]) == []  # nothing run yet
     grid = [row(a, b, 1.0) for a in (1.0, 2.0) for b in (10.0, 2.0)]  # a full grid: no value is the most common
     assert [(line["label"], line["reference"], line["joined"]) for line in curves(spec, grid, ["a", "b", "c"])] == \
         [("b = 2", False, True), ("b = 10", False, True)]

@@ -108,7 +108,7 @@ def curves(spec: dict, rows: list[dict], keys: list[str]) -> list[dict]:
     counts = [Counter(json.dumps(column(row, k)) for row, _, _ in points).most_common() for k in others]
     varying = [k for k, count in zip(others, counts) if len(count) > 1]
     # the reference: the most common value of every key, if no other value is as common (not in a full grid)
-    unique = all(len(count) == 1 or count[0][1] > count[1][1] for count in counts)
+    unique = all(len(count) < 2 or count[0][1] > count[1][1] for count in counts)
     reference = tuple(count[0][0] for count in counts) if points and unique else None
     groups: dict = {}
     for row, xv, yv in points:
@@ -243,7 +243,8 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
                    fontsize=11)
     _plain_log_ticks(axes, spec)
     axes.grid(True, alpha=0.3)
-    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    if points:
+        axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
     figure.savefig(path, dpi=120)
     plt.close(figure)
