@@ -11,6 +11,7 @@ directories first, so the report shows exactly what is on disk.
 import html
 import json
 import math
+import os
 import re
 import sys
 import textwrap
@@ -18,6 +19,7 @@ from collections import Counter
 from pathlib import Path
 
 from femcontact.errors import InputError
+from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.study import units
 from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study
 
@@ -33,14 +35,18 @@ def command(args) -> int:
     from femcontact.study.database import Database
 
     study = load_study(args.study, args.set, args.results)
-    study.results.mkdir(parents=True, exist_ok=True)
+    make_dir(study.results)
     database = Database(study.database, study.keys)
-    database.rebuild(study.cases)
-    csv = database.export_csv(study.results / "results.csv")
-    rows = database.rows()
+    try:
+        database.rebuild(study.cases)
+        csv = database.export_csv(study.results / "results.csv")
+        rows = database.rows()
+        columns = database.csv_columns()
+    finally:
+        database.close()
     for row in rows:
         row["scene"] = json.loads(row["scene"]) if row["scene"] else {}
-    columns = headline_columns(study, database.csv_columns(), rows)
+    columns = headline_columns(study, columns, rows)
     plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
     document = summary(study, columns, rows, plots, snapshots)
@@ -151,7 +157,7 @@ def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> 
                     title="joined: cases differing in x only" if spec["kind"] == "line" else None,
                     title_fontsize=7)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{y}_vs_{x}") + ".png")
-    figure.savefig(path, dpi=120)
+    write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
 
@@ -246,7 +252,7 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
     if points:
         axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
-    figure.savefig(path, dpi=120)
+    write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
 
@@ -293,10 +299,15 @@ def write_snapshots(study, rows: dict) -> list[Path]:
         if not fields.exists():
             print(f"  (no snapshot of {case.id}: {fields} missing; does the solver write it?)", file=sys.stderr)
             continue
-        (study.results / "snapshots").mkdir(exist_ok=True)
+        make_dir(study.results / "snapshots")
         path = study.results / "snapshots" / f"{case.id}.png"
-        snapshot.render(fields, path, zoom=settings["zoom"] or None, scale=settings["scale"],
-                        zoom_radius=settings["zoom_radius"])
+        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")  # rendered whole, then renamed
+        try:
+            snapshot.render(fields, tmp, zoom=settings["zoom"] or None, scale=settings["scale"],
+                            zoom_radius=settings["zoom_radius"])
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
         paths.append(path)
     return paths
 
@@ -352,7 +363,7 @@ def write_markdown(blocks: list[tuple], path: Path) -> Path:
             lines += ["| " + " | ".join(map(_markdown, cells)) + " |" for cells in body] + [""]
         else:
             lines += [f"![{content[1]}]({content[0]})", ""]
-    path.write_text("\n".join(lines).rstrip() + "\n")
+    write_text_atomic(path, "\n".join(lines).rstrip() + "\n")
     return path
 
 
@@ -389,7 +400,7 @@ def write_html(blocks: list[tuple], path: Path, title: str) -> Path:
             parts.append(f'<figure><img src="{html.escape(source)}" alt="{html.escape(caption)}">'
                          f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     parts += ["</body>", "</html>"]
-    path.write_text("\n".join(parts) + "\n")
+    write_text_atomic(path, "\n".join(parts) + "\n")
     return path
 
 
