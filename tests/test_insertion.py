@@ -23,7 +23,7 @@ FREE = ["hole.width=14.0", "peg.offset=0.0", "peg.insertion_depth=2.0", "steps.0
         "steps.0.support_motion.y=0.0"]
 THREE_D = ["dim=3", "effects=['compliant_support']", "hole.kind='single'", "hole.width=16.0", "hole.depth=6.0",
            "hole.block_width=4.0", "hole.bottom_thickness=2.0", "hole.chamfer_width=0.0", "peg.insertion_depth=2.0",
-           "peg.offset=0.0", "mesh.contact_size=2.0", "mesh.size_max=4.0", "mesh.contact_zone=1.0",
+           "peg.offset=0.0", "mesh.contact_size=2.0", "mesh.size_max=4.0", "mesh.contact_zone=2.0",
            "support.model='rcc'", "steps.0.support_motion.y=0.0", "steps.0.stop.column=''"]
 
 

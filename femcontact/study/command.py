@@ -9,9 +9,11 @@ import sys
 import time
 
 from femcontact.errors import InputError
+from femcontact.io import WriteError, describe, make_dir
 from femcontact.study import slurm
 from femcontact.study.database import Database
-from femcontact.study.runner import Case, Progress, Runner, Study, _describe, load_study, read_result
+from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, load_study,
+                                     read_result)
 
 
 def add_arguments(parser):
@@ -42,29 +44,46 @@ def add_arguments(parser):
 
 
 def command(args) -> int:
+    if args.jobs is not None and args.jobs < 0:
+        raise InputError(f"--jobs {args.jobs}: expected >= 0 (0 = cores // ranks per case)")
+    if args.ranks_per_case is not None and args.ranks_per_case < 1:
+        raise InputError(f"--ranks-per-case {args.ranks_per_case}: expected >= 1")
+    if args.launcher is not None and _check_launcher(args.launcher):
+        raise InputError(f"--launcher {args.launcher!r}: {_check_launcher(args.launcher)}")
     study = load_study(args.study, args.set, args.results)
     settings = study.settings
-    ranks = args.ranks_per_case or settings["ranks_per_case"]
+    ranks = args.ranks_per_case if args.ranks_per_case is not None else settings["ranks_per_case"]
     jobs = args.jobs if args.jobs is not None else settings["jobs"]
-    if jobs < 0 or ranks < 1:
-        raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
     if args.launcher is not None:
         settings["launcher"] = args.launcher
+    if args.list:  # reads the case directories only: works on a read-only results directory
+        return _list(study)
     if args.status:
         return _status(study)
     max_concurrent = args.max_concurrent if args.max_concurrent is not None else jobs  # SLURM: 0 = no limit
     jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
-    study.results.mkdir(parents=True, exist_ok=True)
-    lock = open(study.results / ".lock", "w")
+    make_dir(study.results)
+    try:
+        lock = open(study.results / ".lock", "w")
+    except OSError as error:
+        raise WriteError(describe(error, study.results / ".lock")) from None
     try:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
 
     database = Database(study.database, study.keys)
+    try:
+        return _run(study, args, database, jobs, ranks, max_concurrent)
+    finally:
+        database.close()
+        lock.close()
+
+
+def _run(study: Study, args, database, jobs: int, ranks: int, max_concurrent: int) -> int:
+    """Run (or submit) the cases of a locked study that need it; returns the exit code."""
+    settings = study.settings
     database.rebuild(study.cases)  # the case directories are the truth
-    if args.list:
-        return _list(study)
     if args.scheduler == "slurm":
         return _submit(study, args, ranks, max_concurrent)
     slurm.refuse_if_in_slurm(study)
@@ -87,6 +106,11 @@ def command(args) -> int:
         print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
               "run the same command again to continue", file=sys.stderr)
         return 130
+    except InputError as error:  # disk full, read-only, launcher gone: stop, keep what is recorded
+        progress.close()
+        runner.stop_all()
+        raise type(error)(f"study {settings['name']}: stopped after {progress.done} of {len(todo)} cases: {error}; "
+                          "every finished case is recorded; run the same command again to continue") from None
     finally:
         signal.signal(signal.SIGTERM, previous)
     progress.close()
@@ -95,10 +119,13 @@ def command(args) -> int:
 
 
 def _status(study: Study) -> int:
-    study.results.mkdir(parents=True, exist_ok=True)
+    make_dir(study.results)
     database = Database(study.database, study.keys)
-    database.rebuild(study.cases)
-    database.export_csv(study.results / "results.csv")
+    try:
+        database.rebuild(study.cases)
+        database.export_csv(study.results / "results.csv")
+    finally:
+        database.close()
     slurm.status(study)
     return 0
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.io import write_json_atomic
+from femcontact.io import WriteError, describe, make_dir, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.config.scene import case_id, read_toml, resolve
 
@@ -46,7 +46,8 @@ SCHEMA = {
         "ranks_per_case": Field("int", 1, "MPI ranks per case", min=1),
         "time_limit": Field("float", 600.0, "seconds per case; a case past it is killed and recorded failed",
                             positive=True),
-        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks"),
+        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
+                          check=lambda v: _check_launcher(v)),
         "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
     },
     "scene": _TABLE,
@@ -79,7 +80,22 @@ SCHEMA = {
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
     },
+    "report": {
+        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
+                         "default: swept keys, status, the family's primary metrics, wall time)",
+                         check=lambda v: _check_columns(v)),
+    },
 }
+MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
+
+
+def _check_columns(columns: list[str]) -> str | None:
+    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
+    if bad:
+        return f"column {bad[0]!r} is empty or repeated"
+    if len(columns) > MAX_COLUMNS:
+        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
+    return None
 
 
 def flatten(table: dict, prefix: str = "") -> dict:
@@ -102,6 +118,19 @@ def _check_lists(table, same_length: bool) -> str | None:
         return f"{bad[0]} must be a non-empty list of values"
     if same_length and len({len(values) for values in lists.values()}) > 1:
         return "zipped lists must have one length: " + ", ".join(f"{k} has {len(v)}" for k, v in lists.items())
+    return None
+
+
+def _check_launcher(launcher: str) -> str | None:
+    """A complaint about a launcher command, or None: it must format with {ranks} alone and name a program."""
+    import shutil
+
+    try:
+        words = shlex.split(launcher.format(ranks=1))
+    except (KeyError, IndexError, ValueError) as error:
+        return f"cannot be read ({type(error).__name__}: {error}); the only placeholder is {{ranks}}"
+    if words and shutil.which(words[0]) is None:
+        return f"{words[0]!r}: no such program"
     return None
 
 
@@ -130,6 +159,7 @@ class Study:
     results: Path
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -197,7 +227,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         case.params = {key: get_key(case.scene, key) for key in keys}
     if settings["shared_steps"]:
         _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"])
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
 
 
 def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
@@ -355,18 +385,24 @@ class Runner:
         return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
-        case.dir.mkdir(parents=True, exist_ok=True)
-        (case.dir / "result.json").unlink(missing_ok=True)
-        (case.dir / "scene.toml").write_text(to_toml(case.scene))
+        make_dir(case.dir)
         command = self.command(case)
-        write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                               "slot": slot, "started": time.time()})
-        env = {**os.environ, "XDG_CACHE_HOME": str(self.cache_root / f"slot-{slot}"), "PYTHONUNBUFFERED": "1"}
-        env.setdefault("OMP_NUM_THREADS", "1")
-        with open(case.dir / "log.txt", "wb") as log:
-            process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT, env=env,
-                                       stdin=subprocess.DEVNULL, start_new_session=True,
-                                       preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+        try:
+            (case.dir / "result.json").unlink(missing_ok=True)
+            write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
+            write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
+                                                         "slot": slot, "started": time.time()})
+            log = open(case.dir / "log.txt", "wb")
+        except OSError as error:
+            raise WriteError(describe(error, case.dir)) from None
+        with log:
+            try:
+                process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
+                                           env=launch_environment(self.cache_root / f"slot-{slot}"),
+                                           stdin=subprocess.DEVNULL, start_new_session=True,
+                                           preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+            except OSError as error:
+                raise InputError(f"study.launcher: cannot start {command[0]!r} ({error.strerror})") from None
         self.running.append(Job(case, process, slot, time.monotonic()))
 
     def poll(self) -> list[tuple[Case, dict]]:
@@ -424,8 +460,8 @@ class Runner:
                 if prefix is not None and prefix["status"] != "ok":
                     result = {"status": "failed", "reason": f"shared prefix {case.prefix.id} failed: "
                               f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
-                    case.dir.mkdir(parents=True, exist_ok=True)
-                    (case.dir / "scene.toml").write_text(to_toml(case.scene))
+                    make_dir(case.dir)
+                    write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
                     write_json_atomic(case.dir / "runner.json", self.provenance)
                     write_json_atomic(case.dir / "result.json", result)
                     self._finish(case, result)
@@ -453,10 +489,39 @@ def _signal_group(process: subprocess.Popen, sig: int) -> None:
         pass
 
 
+def launch_environment(cache: Path) -> dict:
+    """Environment of a case's launch: its own JIT cache, unbuffered output, one thread per rank,
+    and what Open MPI needs to start at all, as the Makefile sets it: run as root (containers)
+    and more ranks than cores. Values already set are kept."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(cache), "PYTHONUNBUFFERED": "1"}
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env.setdefault(name, "1")
+    env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    if os.geteuid() == 0:
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    return env
+
+
+def _is_rule(line: str) -> bool:
+    """A banner line of dashes, equals signs or stars (Open MPI frames its messages in them)."""
+    return len(line) >= 3 and not line.strip("-=*")
+
+
 def _exit_reason(code: int, log: Path) -> str:
+    """Why a case ended without a result: the exit status and the log's own error, i.e. its last
+    line, or for a message framed in banner lines (an MPI launcher's) the framed text."""
     how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
-    lines = [line for line in log.read_text(errors="replace").splitlines() if line.strip()] if log.exists() else []
-    return f"{how} without a result" + (f"; last log line: {lines[-1].strip()[:300]}" if lines else "")
+    lines = [line.strip() for line in log.read_text(errors="replace").splitlines() if line.strip()] \
+        if log.exists() else []
+    while lines and _is_rule(lines[-1]):
+        lines.pop()
+        framed = []
+        while lines and not _is_rule(lines[-1]):
+            framed.insert(0, lines.pop())
+        if framed:
+            return f"{how} without a result; launcher: {' '.join(framed)[:300]}"
+    return f"{how} without a result" + (f"; last log line: {lines[-1][:300]}" if lines else "")
 
 
 # -- progress -------------------------------------------------------------------------------------

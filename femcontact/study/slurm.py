@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 from femcontact.errors import InputError
+from femcontact.io import make_dir, write_text_atomic
 from femcontact.io import write_json_atomic as _write_json
 from femcontact.study.runner import (Case, Study, _describe, _exit_reason, _signal_group, case_command, provenance,
                                      read_result, remove_unfinished_compilations, to_toml)
@@ -196,12 +197,12 @@ def _submit_array(study: Study, kind: str, cases: list[Case], stamp: str, *, ran
                   time_limit: str, partition: str, max_concurrent: int, dependency: str = "") -> str:
     """Prepare the directories of `cases`, write manifest and script, sbatch them; returns the job id."""
     directory = (slurm_dir(study) / f"{stamp}-{kind}").resolve()
-    directory.mkdir(parents=True)
+    make_dir(directory)
     tasks = []
     for case in cases:
-        case.dir.mkdir(parents=True, exist_ok=True)
+        make_dir(case.dir)
         (case.dir / "result.json").unlink(missing_ok=True)
-        (case.dir / "scene.toml").write_text(to_toml(case.scene))
+        write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
         tasks.append({"id": case.id, "dir": str(case.dir.resolve()), "params": case.params,
                       "command": case_command(case, launcher, ranks),
                       "prefix": str(case.prefix.dir.resolve()) if case.prefix else None})
@@ -209,9 +210,10 @@ def _submit_array(study: Study, kind: str, cases: list[Case], stamp: str, *, ran
     _write_json(manifest, {"study": study.settings["name"], "kind": kind, "ranks": ranks,
                            "time_limit": study.settings["time_limit"], "tasks": tasks})
     script = directory / "job.sh"
-    script.write_text(sbatch_script(name=study.settings["name"], kind=kind, count=len(cases), ranks=ranks,
-                                    manifest=manifest, output_dir=directory, time_limit=time_limit,
-                                    partition=partition, max_concurrent=max_concurrent, dependency=dependency))
+    write_text_atomic(script, sbatch_script(
+        name=study.settings["name"], kind=kind, count=len(cases), ranks=ranks, manifest=manifest,
+        output_dir=directory, time_limit=time_limit, partition=partition, max_concurrent=max_concurrent,
+        dependency=dependency))
     done = subprocess.run(["sbatch", "--parsable", str(script)], capture_output=True, text=True)
     if done.returncode != 0:
         raise InputError(f"sbatch {script} failed: {done.stderr.strip() or done.returncode}")
