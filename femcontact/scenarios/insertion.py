@@ -9,16 +9,19 @@ one point of the force history, in the analytic tier's conventions (femcontact.r
   tier's support is rigid along the axis; `gripper_depth` leaves q_y out;
 - Fz (N): insertion force, the support pushing the peg down (-support_Fy); Fx (N): the support's
   lateral force on the peg; M (N*mm): the support's moment on the peg about its tip;
-- phase: from the contact zones A (x < 0) and B (x > 0): none; one zone whose leading tip
-  corner is still above the chamfer's lower edge: 'chamfer'; one zone otherwise: 'one_point';
+- phase: from the contact zones A (x < 0) and B (x > 0): none; one zone touched by the peg's tip
+  corner (`corner_contacts`) still above the chamfer's lower edge, or less than half a contact
+  element below it (the corner rounding the hole's edge node): 'chamfer'; one zone otherwise:
+  'one_point';
   both zones: 'two_point', with l (mm) from the tip to the edge contact (the higher zone force
   centre) along the peg. A zone is in contact when its force exceeds `CONTACT_FLOOR` of
   the largest zone force of the run.
 
 Metrics: `two_point_onset` (the new zone's force extrapolated linearly to zero over the first
 two two-point rows, kept inside the increment where it appeared), `peak_force`/`peak_depth`
-(largest Fz at s >= 0), `chamfer_peak_force`, `jammed` (the insertion force runs away:
-dFz/ds between two rows exceeds `JAM_SLOPE` K_x, or the scene's stop condition ended the run;
+(largest Fz at s >= 0 after the chamfer), `chamfer_peak_force`, `jammed` (the insertion force runs away:
+dFz/ds over `JAM_WINDOW` of gripper travel exceeds `JAM_SLOPE` K_x, or the scene's stop
+condition ended the run;
 `jam_depth` the first such depth). Measured on studies/insertion.toml: sliding insertions rise
 at most 1.8 K_x (the chamfer), the jammed case at 7.3 K_x in its first jammed increment and 165 K_x
 in the next, so 5 K_x separates them;
@@ -34,6 +37,7 @@ from geometry.placement import chamfer_height
 
 CONTACT_FLOOR = 1e-4
 JAM_SLOPE = 5.0
+JAM_WINDOW = 0.05  # mm
 
 
 def force_history(scene: dict, history: list[dict]) -> dict:
@@ -41,6 +45,7 @@ def force_history(scene: dict, history: list[dict]) -> dict:
     peg, hole, support = scene["peg"], scene["hole"], scene["support"]
     h_c = chamfer_height(hole["chamfer_width"], hole["chamfer_angle"])
     r, lg = peg["width"] / 2, support["compliance_centre"]
+    h_contact = scene["mesh"]["contact_size"] or 0.0
     largest = max([max(row["contact_A_force"], row["contact_B_force"]) for row in history] + [0.0])
     floor = max(CONTACT_FLOOR * largest, 1e-12)
     out = {key: [] for key in ("depth", "gripper_depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B", "l")}
@@ -57,7 +62,8 @@ def force_history(scene: dict, history: list[dict]) -> dict:
         else:
             side = -1.0 if touching[0] == "A" else 1.0
             corner_y = row["tip_y"] + side * r * math.sin(theta)
-            phase = "chamfer" if corner_y > -h_c else "one_point"
+            on_corner = row.get("corner_contacts", 1) > 0
+            phase = "chamfer" if on_corner and corner_y > -h_c - h_contact / 2 else "one_point"
         out["depth"].append(peg["insertion_depth"] - row["gripper_y"] - row["support_qy"] - h_c)
         out["gripper_depth"].append(peg["insertion_depth"] - row["gripper_y"] - h_c)
         out["Fz"].append(Fz)
@@ -94,15 +100,17 @@ def two_point_onset(curve: dict) -> float | None:
 
 
 def jam_depth(scene: dict, curve: dict) -> float | None:
-    """First gripper depth (mm) where dFz/ds exceeds JAM_SLOPE K_x (s of the gripper: a jammed peg
-    stops while the gripper goes on), or None."""
+    """First gripper depth (mm) where dFz/ds, over at least `JAM_WINDOW` of gripper travel, exceeds
+    JAM_SLOPE K_x (s of the gripper: a jammed peg stops while the gripper goes on), or None. The
+    window keeps cut increments (a few micrometres) from turning noise into slope."""
     from femcontact.effects.compliant_support import stiffness_matrix
 
     limit = JAM_SLOPE * stiffness_matrix(scene)[0, 0]
     depth, Fz = curve["gripper_depth"], curve["Fz"]
-    for i in range(1, len(depth)):
-        if depth[i] > depth[i - 1] and (Fz[i] - Fz[i - 1]) / (depth[i] - depth[i - 1]) > limit:
-            return float(depth[i])
+    for i in range(len(depth)):
+        j = next((j for j in range(i + 1, len(depth)) if depth[j] >= depth[i] + JAM_WINDOW), None)
+        if j is not None and (Fz[j] - Fz[i]) / (depth[j] - depth[i]) > limit:
+            return float(depth[j])
     return None
 
 
@@ -126,7 +134,7 @@ def insertion_metrics(simulation) -> dict:
         return {"analytic": False, "wall_time_s": float(sum(simulation.timings.values()))}
     curve = force_history(scene, history)
     depth, Fz = np.array(curve["depth"]), np.array(curve["Fz"])
-    inside = depth >= 0
+    inside = (depth >= 0) & np.array([ph != "chamfer" for ph in curve["phase"]])
     out = {"two_point_onset": two_point_onset(curve)}
     if inside.any():
         i = int(np.argmax(np.where(inside, Fz, -np.inf)))
