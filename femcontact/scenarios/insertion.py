@@ -23,7 +23,7 @@ two two-point rows, kept inside the increment where it appeared), `peak_force`/`
 dFz/ds over `JAM_WINDOW` of gripper travel exceeds `JAM_SLOPE` K_x, or the scene's stop
 condition ended the run;
 `jam_depth` the first such depth). Measured on studies/insertion.toml: sliding insertions rise
-at most 1.8 K_x (the chamfer), the jammed case at 7.3 K_x in its first jammed increment and 165 K_x
+at most 1.8 K_x (the chamfer), the jammed case at 7.3 K_x in its first jammed increment and over 100 K_x
 in the next, so 5 K_x separates them;
 `wedged` (a two-point row whose contact points lie inside each other's friction cones: the
 line joining the zone force centres within atan(mu) of the wall normal and of the peg's side
