@@ -65,6 +65,10 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
 
     if spec["kind"] == "wedge_map":
         return write_wedge_map(spec, rows, results)
+    if spec["kind"] in ("force_curves", "sweep", "jam_map"):
+        from femcontact.study import snap_fit_report
+
+        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results)
     x, y, series = spec["x"], spec["y"], spec["series"]
     groups: dict = {}
     for row in rows:
@@ -242,6 +246,9 @@ def write_summary(study, columns: list[str], rows: list[dict], plots, snapshots)
                   "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
         lines += ["| " + " | ".join(_cell(row.get(c)) for c in shown) + " |" for row in rows]
     lines += [""] + wedge_table(rows)
+    from femcontact.study.snap_fit_report import table as snap_fit_table
+
+    lines += [""] + snap_fit_table(rows)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots]
     lines += [""] + [f"![{p.stem}](snapshots/{p.name})" for p in snapshots]
     path = study.results / "summary.md"

@@ -60,8 +60,11 @@ SCHEMA = {
         "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
         "y": Field("str", doc="column on the y axis"),
         "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds)",
-                      choices=("line", "scatter", "wedge_map")),
+        "kind": Field("str", "line", "line, scatter, wedge_map (wedged markers + analytic bounds), force_curves "
+                      "(list metrics against each other, reduced model beside), sweep (a metric, model beside) or jam_map "
+                      "(snap fit)", choices=("line", "scatter", "wedge_map", "force_curves", "sweep", "jam_map")),
+        "select": Field("any", {}, "force_curves, sweep: only cases whose scene has key = value (or one of a list)",
+                        check=lambda v: None if isinstance(v, dict) else "must be a table"),
         "logx": Field("bool", False, "logarithmic x axis"),
         "logy": Field("bool", False, "logarithmic y axis"),
         "title": Field("str", "", "plot title"),
