@@ -73,6 +73,9 @@ def test_lateral_stiffness_is_cantilever_theory():
                                        spring["width"])
     assert m["final_contact_force"] / spring["interference"] == pytest.approx(k, rel=5e-3)
     assert m["insertion_force"][-1] == pytest.approx(0.0, abs=1e-9)
+    # the root carries the moment F L of the lateral force at the apex (height L): 6 F L / (b h^2)
+    F = m["final_contact_force"] / spring["width"]
+    assert m["root_stress"] == pytest.approx(6 * F * spring["length"] / spring["thickness"] ** 2, rel=1e-3)
 
 
 def test_large_deflection_departs_from_the_rigid_arm_as_the_elastica_does():
@@ -133,3 +136,27 @@ def test_reduced_model_matches_fe_on_a_convex_nose():
                                           reference.coupling(spring), depth)
     force = np.array(m["insertion_force"])
     assert np.max(np.abs(force - axial)) < 0.03 * force.max()
+
+
+def test_elastica_reference_reproduces_bisshopp_drucker():
+    """Clamped elastica under a tip load perpendicular to the undeformed axis: for P L^2 / EI = 1
+    the tip's lateral deflection is 0.3017 L (Bisshopp and Drucker 1945, Q. Appl. Math. 3:272)."""
+    E, h, L = 125000.0, 0.3, 5.0
+    P = E * h ** 3 / 12 / L ** 2
+    assert reference.elastica_tip_force(E, h, L, 0.0, 0.3017 * L) == pytest.approx(P, rel=2e-4)
+
+
+def test_constant_force_nose_halves_the_taper_peak_in_the_reduced_model():
+    """Whitney's constant-force nose of the taper's working length (closed form for the reduced
+    model, 24 points): its insertion force stays within 12 % of the design force F over the middle
+    80 % of the stroke and peaks 42 % below the 30-degree taper's at equal final contact force."""
+    from femcontact.scenarios import snap_fit_design as design
+    from femcontact.scenarios.snap_fit import reduced_model
+
+    scene = load_scene(SCENE, ["spring.count=1"])
+    nose = design.constant_force(scene, design.taper_stroke(scene))
+    _, force = design.forces(scene, nose["points"])
+    middle = force[len(force) // 10: -len(force) // 10]
+    assert np.all(np.abs(middle / nose["force"] - 1) < 0.12)
+    taper = reduced_model(scene)["model_peak_insertion_force"]
+    assert nose["peak"] / taper == pytest.approx(0.577, abs=0.01)

@@ -17,7 +17,10 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 - jammed: in some insertion increment the apex of spring B is in contact with the nose
   and its force lies strictly inside the friction cone about the nose's normal, i.e. the
   apex sticks to the nose and is pushed along instead of sliding (`STICK_MARGIN`);
-- max_von_mises, yield_ratio (its ratio to the spring's yield stress), yielded;
+- max_von_mises, yield_ratio (its ratio to the spring's yield stress), yielded: the FE field's
+  largest value, which includes the stress concentration at the sharp apex under contact;
+- root_stress: the beam stress at the root of spring B, 6 |M| / h^2 + |N| / h (MPa) from the
+  support's reactions (M about the root's centre), and root_yield_ratio, its ratio to yield;
 - the reduced model's peak insertion force and jam prediction beside them.
 """
 import math
@@ -86,6 +89,8 @@ def snap_fit_metrics(simulation) -> dict:
     out["max_von_mises"] = max(row["max_von_mises"] for row in history)
     out["yield_ratio"] = out["max_von_mises"] / scene["materials"]["spring"]["yield_stress"]
     out["yielded"] = bool(out["yield_ratio"] > 1)
+    out["root_stress"] = root_stress(scene, history)
+    out["root_yield_ratio"] = out["root_stress"] / scene["materials"]["spring"]["yield_stress"]
     out.update(reduced_model(scene))
     if nose.kind == "taper":
         alpha = math.radians(scene["peg"]["nose_angle"])
@@ -93,6 +98,18 @@ def snap_fit_metrics(simulation) -> dict:
         out["withdrawal_ratio_statics"] = float(reference.force_ratio(alpha, mu, withdrawal=True))
     out["wall_time_s"] = float(sum(simulation.timings.values()))
     return out
+
+
+def root_stress(scene: dict, rows: list[dict]) -> float:
+    """Largest beam stress (MPa) at the root of spring B over the rows: bending 6 |M| / h^2 plus
+    axial |N| / h, from the root's reactions per mm of width (the moment recorded about the origin
+    is moved to the root's centre)."""
+    from geometry.snap_fit import layout
+
+    h = scene["spring"]["thickness"]
+    centre = layout(scene).inner + h / 2
+    return float(max((6 * abs(row["reaction_root_B_Mz"] - centre * row["reaction_root_B_y"]) / h ** 2
+                      + abs(row["reaction_root_B_y"]) / h for row in rows), default=0.0))
 
 
 def reduced_model(scene: dict) -> dict:
