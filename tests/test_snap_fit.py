@@ -102,10 +102,11 @@ def test_jamming_where_the_friction_cone_says(angle, expected):
     """mu = 0.3 (phi = 16.7 deg). 80 deg: the insertion force lies inside the friction cone
     (alpha + phi > 90 deg) and the apex sticks on the nose; 55 deg slides. (Between 65.6 and
     73.3 deg the reduced model jams, 1.5 (e/L) tan(alpha + phi) >= 1, the plain cone does not;
-    there Newton cycles between stick and slip, docs/snap_fit.md.) A short push, 0.04 mm."""
+    there Newton cycles between stick and slip, docs/snap_fit.md.) A short push, 0.015 mm past
+    first touch in 0.0035 mm increments: the 80-degree nose's working part is only 0.026 mm long."""
     H = 0.15 if angle > 60 else 0.5
     m = simulate([f"peg.nose_angle={angle}", "contact.mu=0.3", f"peg.nose_length={H}", "peg.start_gap=0.02",
-                  "steps.0.motion.y=-0.06", "steps.0.increments=4", "steps.1.motion.y=-0.06",
+                  "steps.0.motion.y=-0.035", "steps.0.increments=10", "steps.1.motion.y=-0.035",
                   "steps.1.increments=1"])
     assert m["jammed"] is expected
     assert m["model_jammed"] is expected

@@ -68,7 +68,7 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
     if spec["kind"] in ("force_curves", "sweep", "jam_map"):
         from femcontact.study import snap_fit_report
 
-        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results)
+        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results, column)
     x, y, series = spec["x"], spec["y"], spec["series"]
     groups: dict = {}
     for row in rows:
@@ -248,7 +248,7 @@ def write_summary(study, columns: list[str], rows: list[dict], plots, snapshots)
     lines += [""] + wedge_table(rows)
     from femcontact.study.snap_fit_report import table as snap_fit_table
 
-    lines += [""] + snap_fit_table(rows)
+    lines += [""] + snap_fit_table(rows, column)
     lines += [""] + [f"![{p.stem}]({p.name})" for p in plots]
     lines += [""] + [f"![{p.stem}](snapshots/{p.name})" for p in snapshots]
     path = study.results / "summary.md"

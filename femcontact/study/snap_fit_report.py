@@ -5,9 +5,11 @@
   with the reduced rigid-arm model of the same scene dashed beside each;
 - `sweep`: a scalar metric (FE, markers) against a swept key for the cases `select` picks, with
   the reduced model's `model_<metric>` as a line when the cases have it;
-- `jam_map`: simulated jammed / sliding cases in the plane of the nose angle (x) and mu (y),
+- `jam_map`: simulated jammed / sliding cases (those `select` picks) in the plane of the nose angle (x) and mu (y),
   with Whitney's friction-cone bound alpha + phi = 90 deg and the reduced model's bound
   1.5 (e/L) tan(alpha + phi) = 1.
+
+The report passes its `column(row, name)` (a row's metric or scene value) to each function.
 """
 import math
 import re
@@ -46,23 +48,35 @@ def model_curve(scene: dict, depth, withdrawal: bool = False) -> np.ndarray:
     return spring["count"] * (-axial if withdrawal else axial)
 
 
-def write_force_curves(spec: dict, rows: list[dict], results: Path) -> Path:
-    from femcontact.study.report import _label, column
+def _label(value) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
+
+def _cell(value) -> str:
+    return "" if value is None else f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def write_force_curves(spec: dict, rows: list[dict], results: Path, column) -> Path:
     plt = _figure()
     figure, axes = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
     withdrawal = spec["y"].startswith("withdrawal")
+    ends = []  # where each curve settles to its value on the shank
     for index, row in enumerate(r for r in rows if r["status"] == "ok" and _selected(r, spec["select"])):
         depth, force = column(row, spec["x"]), column(row, spec["y"])
         if not isinstance(depth, list) or not isinstance(force, list):
             continue
         label = _label(column(row, spec["series"])) if spec["series"] else row["case_id"]
         colour = f"C{index % 10}"
+        changing = [d for d, f in zip(depth, force) if abs(f - force[-1]) > 1e-3 * max(map(abs, force))]
+        ends.append(max(changing, default=max(depth)))
         axes.plot(depth, force, "o-", color=colour, markersize=3, label=f"FE: {label}")
         grid = np.linspace(min(depth), max(depth), 300)
         axes.plot(grid, model_curve(row["scene"], grid, withdrawal), "--", color=colour, linewidth=1,
                   label=f"rigid-arm model: {label}")
+    if ends:
+        axes.set_xlim(right=1.25 * max(ends))
     axes.set(xlabel=f"{spec['x']} (mm)", ylabel=f"{spec['y']} (N)", title=spec["title"] or f"{spec['y']} against depth")
+    axes.title.set_fontsize(9)
     axes.grid(True, alpha=0.3)
     axes.legend(fontsize=7)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{spec['y']}_curves") + ".png")
@@ -71,9 +85,7 @@ def write_force_curves(spec: dict, rows: list[dict], results: Path) -> Path:
     return path
 
 
-def write_sweep(spec: dict, rows: list[dict], results: Path) -> Path:
-    from femcontact.study.report import column
-
+def write_sweep(spec: dict, rows: list[dict], results: Path, column) -> Path:
     plt = _figure()
     figure, axes = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
     chosen = sorted((column(r, spec["x"]), r) for r in rows if r["status"] == "ok" and _selected(r, spec["select"]))
@@ -92,14 +104,14 @@ def write_sweep(spec: dict, rows: list[dict], results: Path) -> Path:
     return path
 
 
-def write_jam_map(spec: dict, rows: list[dict], results: Path) -> Path:
+def write_jam_map(spec: dict, rows: list[dict], results: Path, column) -> Path:
     from femcontact.references import snap_fit as reference
-    from femcontact.study.report import column
 
     plt = _figure()
-    figure, axes = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    figure, axes = plt.subplots(figsize=(6.4, 5.4), layout="constrained")
     marks = {True: ("x", "tab:red", "FE: jammed"), False: ("o", "tab:green", "FE: slides")}
-    seen, couple = set(), None
+    seen, couples = set(), []
+    rows = [r for r in rows if _selected(r, spec["select"])]
     for row in rows:
         x, y = column(row, spec["x"]), column(row, spec["y"])
         if row["status"] != "ok":
@@ -110,7 +122,8 @@ def write_jam_map(spec: dict, rows: list[dict], results: Path) -> Path:
         marker, colour, label = marks[jammed]
         axes.plot(x, y, marker, color=colour, markersize=8, label=None if jammed in seen else label)
         seen.add(jammed)
-        couple = reference.coupling(row["scene"]["spring"])
+        couples.append(reference.coupling(row["scene"]["spring"]))
+    couple = max(set(couples), key=couples.count) if couples else None  # the most common spring
     mu = np.linspace(0.01, 1.0, 200)
     axes.plot(90 - np.degrees(np.arctan(mu)), mu, "k-", label="friction cone: alpha + phi = 90 deg")
     if couple:
@@ -120,31 +133,29 @@ def write_jam_map(spec: dict, rows: list[dict], results: Path) -> Path:
              title=spec["title"] or "Jamming: nose angle against friction")
     axes.set_ylim(0, max(0.6, max((column(r, spec["y"]) or 0) for r in rows) * 1.1) if rows else 1.0)
     axes.grid(True, alpha=0.3)
-    axes.legend(fontsize=7)
+    axes.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     path = results / (spec["file"] or "jam_map.png")
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
 
 
-def table(rows: list[dict]) -> list[str]:
+def table(rows: list[dict], column) -> list[str]:
     """Markdown lines: the nose shapes' peak insertion force, FE against the reduced model, and
     the change against the flat taper (the cases whose scene name starts with `nose_`; the taper
     is `nose_taper`)."""
-    from femcontact.study.report import _cell, column
-
     cases = [r for r in rows if r["status"] == "ok" and str(column(r, "name")).startswith("nose_")]
     if not cases:
         return []
     taper = next((r for r in cases if column(r, "name") == "nose_taper"), None)
     lines = ["## Nose shapes at equal final contact force", "",
              "| design | nose | final contact force (N) | peak insertion (N) FE | model | vs taper (FE) | "
-             "peak withdrawal (N) | max stress / yield |", "|---|---|---|---|---|---|---|---|"]
+             "peak withdrawal (N) | root stress / yield | max FE stress / yield |", "|---|---|---|---|---|---|---|---|---|"]
     for r in cases:
         saving = (1 - column(r, "peak_insertion_force") / column(taper, "peak_insertion_force")) if taper else math.nan
         lines.append("| " + " | ".join(_cell(v) for v in (
             column(r, "name")[5:], column(r, "peg.nose"), column(r, "final_contact_force"),
             column(r, "peak_insertion_force"), column(r, "model_peak_insertion_force"),
             f"{-100 * saving:+.1f} %" if taper else "", column(r, "peak_withdrawal_force"),
-            column(r, "yield_ratio"))) + " |")
+            column(r, "root_yield_ratio"), column(r, "yield_ratio"))) + " |")
     return lines + [""]
