@@ -10,7 +10,7 @@ STAMPS := .stamps
 SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 RANKS ?= 2
 
-APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py \
+APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
 	python3-meshio python3-pytest python3-venv python3-pip python3-matplotlib \
 	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6
 PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(basename $(notdir $(STUDY_FILES)))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi study bench clean $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -54,10 +54,33 @@ test: setup
 	$(MAKE) --no-print-directory test-serial test-mpi
 
 test-serial: setup
-	$(PY) -m pytest -q tests --ignore=tests/mpi
+	$(PY) -m pytest -q tests --ignore=tests/mpi --ignore=tests/slurm
 
 test-mpi: setup
 	timeout 1200 mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider tests/mpi
+
+# Studies through a real SLURM (not part of `make test`; needs root, as slurmd starts the jobs):
+# a one-node cluster on localhost (tests/slurm/cluster.sh: munged, slurmctld, slurmd, generated
+# config and munge key, all in a temporary directory), the tests of tests/slurm against it, and
+# the cluster stopped and removed on any exit.
+SLURM_APT_PACKAGES := slurm-wlm munge
+
+$(STAMPS)/apt-slurm: Makefile
+	@mkdir -p $(STAMPS)
+	@if [ "$$(dpkg-query -W -f='$${Status}\n' $(SLURM_APT_PACKAGES) 2>/dev/null | grep -c 'install ok installed')" \
+	    -lt "$(words $(SLURM_APT_PACKAGES))" ]; then \
+	  echo "== installing SLURM and munge (Debian packages)"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(SLURM_APT_PACKAGES); \
+	fi
+	@touch $@
+
+test-slurm: setup $(STAMPS)/apt-slurm
+	@cluster=$$(mktemp -d /tmp/femcontact-slurm.XXXXXX); \
+	  trap "$(SUDO) tests/slurm/cluster.sh stop $$cluster; $(SUDO) rm -rf $$cluster" EXIT; \
+	  echo "== one-node SLURM in $$cluster"; \
+	  $(SUDO) tests/slurm/cluster.sh start $$cluster && source $$cluster/env && \
+	  PYTHONPATH=$(CURDIR)$${PYTHONPATH:+:$$PYTHONPATH} timeout 900 $(PY) -m pytest -q -p no:cacheprovider tests/slurm
 
 study: $(DEFAULT_STUDY)
 
@@ -70,6 +93,14 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+
+# What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
+accuracy: setup
+	$(PY) -m femcontact.scenarios.accuracy --with-3d
+
+# Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
+stability: setup
+	$(PY) -m femcontact.scenarios.stability $(STABILITY_FLAGS)
 
 clean:
 	rm -rf results

@@ -10,8 +10,6 @@ the zone the size grows linearly (gmsh_tools.GRADING) up to the maximum size.
 """
 import math
 
-import gmsh
-
 from geometry.errors import InputError
 from geometry import gmsh_tools
 
@@ -31,6 +29,8 @@ def zone_elements(sz: gmsh_tools.Sizes) -> int:
 
 
 def _generate_2d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
+    import gmsh
+
     w, h = scene["block"]["width"], scene["block"]["height"]
     k = zone_elements(sz)
     z = k * sz.h_contact
@@ -56,6 +56,8 @@ def _generate_2d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
 
 
 def _generate_3d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
+    import gmsh
+
     block = scene["block"]
     w, h, depth = block["width"], block["height"], block["depth"]
     if sz.zone >= w / 2:

@@ -1,12 +1,11 @@
 """gmsh plumbing shared by the builders: sizes, polygons, physical groups, size fields.
 
 Everything here runs on the rank that builds the gmsh model, except `Sizes`/`sizes`,
-which every rank computes from the scene.
+which every rank computes from the scene. gmsh (0.3-0.5 s to load) is imported by the
+functions that call it, here and in the builders, so validating a scene never loads it.
 """
 import math
 from dataclasses import dataclass
-
-import gmsh
 
 GRADING = 0.15  # growth of the element size per unit distance from a fine zone (mm/mm)
 
@@ -58,6 +57,8 @@ _initialized = False  # gmsh 4.8 has no gmsh.isInitialized()
 
 def start(name: str) -> None:
     """Start (once per process) a quiet gmsh session, and a fresh model `name`."""
+    import gmsh
+
     global _initialized
     if not _initialized:
         gmsh.initialize()
@@ -71,6 +72,8 @@ def polygon(vertices, edges) -> tuple[int, list[tuple[str | None, bool, int]]]:
     """Plane surface (built-in kernel) bounded by the closed polygon `vertices` [(x, y)];
     edges[i] = (name or None, fine) describes the edge from vertex i to vertex i + 1.
     Returns the surface tag and [(name, fine, line tag)] per edge."""
+    import gmsh
+
     occ = gmsh.model.geo
     points = [occ.addPoint(x, y, 0.0) for x, y in vertices]
     lines = [occ.addLine(points[i], points[(i + 1) % len(points)]) for i in range(len(points))]
@@ -81,6 +84,8 @@ def polygon(vertices, edges) -> tuple[int, list[tuple[str | None, bool, int]]]:
 def add_groups(dim: int, entities: dict[str, list[int]], first: int = 1) -> dict[str, int]:
     """One physical group per non-empty name, numbered from `first` in insertion order;
     returns name -> physical group number (the DOLFINx tag value)."""
+    import gmsh
+
     groups = {}
     for name, tags in entities.items():
         if tags:
@@ -95,6 +100,8 @@ def distance_threshold(sizes: Sizes, curves=(), surfaces=(), curve_length: float
     """Size field: sizes.h_contact on the given curves/surfaces, growing linearly with the
     distance to sizes.h_max over sizes.grading_distance. Curves are sampled at about a
     quarter of the contact size (`curve_length`: the longest curve)."""
+    import gmsh
+
     field = gmsh.model.mesh.field
     distance = field.add("Distance")
     if curves:
@@ -115,6 +122,8 @@ def distance_threshold(sizes: Sizes, curves=(), surfaces=(), curve_length: float
 def graded(sizes: Sizes, distance: str) -> int:
     """MathEval size field: sizes.h_contact where the gmsh expression `distance` (mm) is 0,
     growing linearly with it to sizes.h_max over sizes.grading_distance."""
+    import gmsh
+
     slope = GRADING / sizes.resolution
     expression = f"Min({sizes.h_max!r}, {sizes.h_contact!r}+{slope!r}*({distance}))"
     field = gmsh.model.mesh.field.add("MathEval")
@@ -132,6 +141,8 @@ def ball_size(sizes: Sizes, centre, radius: float) -> int:
 def background(fields: list[int]) -> None:
     """Use the minimum of the size `fields` as the only source of element sizes. (The fields
     carry the resolution themselves: gmsh 4.8 can hang evaluating a MathEval of a field.)"""
+    import gmsh
+
     field = gmsh.model.mesh.field
     smallest = field.add("Min")
     field.setNumbers(smallest, "FieldsList", fields)

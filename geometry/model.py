@@ -29,7 +29,8 @@ class Model:
     h_contact: float
 
 
-def _builder(scene: dict):
+def builder(scene: dict):
+    """The builder module of a scene (block, peg_hole_2d, peg_hole_3d or snap_fit)."""
     if scene["geometry"] == "snap_fit":
         from geometry import snap_fit
 
@@ -97,6 +98,14 @@ def points(scene: dict) -> dict:
     return dict(peg_pose(scene).points)
 
 
+def check_mesh(scene: dict) -> float:
+    """Refuse a scene whose mesh would be too large or too coarse (geometry.mesh_size), before
+    gmsh runs; returns the estimated number of elements."""
+    from geometry import mesh_size
+
+    return mesh_size.check(scene, builder(scene).sizes(scene))
+
+
 def build(scene: dict, comm, msh_path=None) -> Model:
     """Mesh the deformable body of a resolved scene on rank 0 of `comm` and distribute it.
     `msh_path`: also write the gmsh mesh there (.msh)."""
@@ -105,13 +114,16 @@ def build(scene: dict, comm, msh_path=None) -> Model:
 
     from geometry import gmsh_tools
 
-    builder = _builder(scene)
-    sizes = builder.sizes(scene)
+    from geometry import mesh_size
+
+    module = builder(scene)
+    sizes = module.sizes(scene)
+    mesh_size.check(scene, sizes)  # before gmsh: an absurd size would exhaust the memory or crash it
     names, error = None, None
     if comm.rank == 0:
         try:
             gmsh_tools.start(scene.get("name", "scene"))
-            names = builder.generate(scene, sizes)
+            names = module.generate(scene, sizes)
             if msh_path is not None:
                 gmsh.write(str(msh_path))
         except Exception as exc:  # re-raised on every rank below, so no rank waits forever

@@ -11,7 +11,6 @@ linearly with the distance to them (gmsh_tools.GRADING) up to the maximum size.
 """
 import math
 
-import gmsh
 import numpy as np
 
 from geometry import gmsh_tools
@@ -140,6 +139,8 @@ def _peg_outline(scene: dict, sz: gmsh_tools.Sizes) -> _Outline:
 def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     """Build and mesh the gmsh model (current gmsh model, this rank only); returns the names:
     facets/cells (name -> physical group number), contact_facets, supports."""
+    import gmsh
+
     lines, fine, surfaces = {}, [], {}
     if scene["rigid"] == "peg":
         for name, outline in _hole_outlines(scene, sz).items():
@@ -164,5 +165,7 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
 
 def _length(line: int) -> float:
     """Length of a straight line of the built-in kernel (mm)."""
+    import gmsh
+
     (a, b) = [tag for _, tag in gmsh.model.getBoundary([(1, line)], oriented=False)]
     return float(np.linalg.norm(np.subtract(gmsh.model.getValue(0, a, []), gmsh.model.getValue(0, b, []))))

@@ -10,7 +10,6 @@ linearly with the distance (gmsh_tools.GRADING) up to the maximum size.
 """
 import math
 
-import gmsh
 import numpy as np
 
 from geometry import gmsh_tools
@@ -28,6 +27,8 @@ def sizes(scene: dict) -> gmsh_tools.Sizes:
 
 def _hole_block(scene: dict) -> tuple[int, dict]:
     """The hole block volume and its faces by tag name."""
+    import gmsh
+
     hole, occ = scene["hole"], gmsh.model.occ
     D, bw, depth, bt = hole["width"], hole["block_width"], hole["depth"], hole["bottom_thickness"]
     cw, angle = hole["chamfer_width"], math.radians(hole["chamfer_angle"])
@@ -62,6 +63,8 @@ def _hole_block(scene: dict) -> tuple[int, dict]:
 
 def _peg(scene: dict) -> tuple[int, dict]:
     """The placed peg volume and its faces by tag name."""
+    import gmsh
+
     peg, occ, pose = scene["peg"], gmsh.model.occ, peg_pose(scene)
     d, length, cw = peg["width"], peg["length"], peg["chamfer_width"]
     h_p = chamfer_height(cw, peg["chamfer_angle"])
@@ -88,6 +91,8 @@ def _peg(scene: dict) -> tuple[int, dict]:
 
 def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     """Build and mesh the gmsh model (current gmsh model, this rank only); returns the names."""
+    import gmsh
+
     if scene["rigid"] == "peg":
         volume, faces = _hole_block(scene)
         cell, supports = "block", ["support"]

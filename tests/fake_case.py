@@ -67,8 +67,11 @@ def main(argv):
         (out / "checkpoint" / "state").write_text("steps done")
     if rank == 0:
         tmp = out / ".result.json.tmp"
-        tmp.write_text(json.dumps(result))
-        os.replace(tmp, out / "result.json")
+        try:
+            tmp.write_text(json.dumps(result))
+            os.replace(tmp, out / "result.json")
+        finally:
+            tmp.unlink(missing_ok=True)  # as `femcontact run`: no temporary left on a full disk
     return 1 if failed else 0
 
 

@@ -80,6 +80,17 @@ def test_hertz_reaction_balances_load():
     assert simulation.history[-1]["reaction_bottom_y"] == pytest.approx(500.0, rel=1e-6)
 
 
+def test_hertz_newton_iterations_from_a_cold_contact_set():
+    """At most 8 Newton iterations per increment on a fine contact zone (h_c = a/32.5, 2
+    increments, force control), the first from a cold contact set. The monotone backtracking
+    line search this replaced failed the first increment there (40 iterations) and then took
+    39 and 10 after the cut: the iterations grew with refinement."""
+    simulation = Simulation(hertz.scene(benchmark_half_width() / 32.5))
+    simulation.run()
+    assert len(simulation.history) == 2
+    assert all(row["newton_iterations"] <= 8 for row in simulation.history)
+
+
 # -- Coulomb friction -----------------------------------------------------------------------
 
 MU, PRESS = 0.3, 1000.0

@@ -6,6 +6,7 @@ provides `add_arguments(parser)` and `command(args) -> int`.
 """
 import argparse
 import importlib
+import logging
 import os
 import sys
 
@@ -13,9 +14,11 @@ from femcontact.errors import InputError
 
 COMMANDS = {
     "run": ("femcontact.cli.run", "run one scene and write its results"),
-    "study": ("femcontact.study.runner", "run the cases of a study that are not done yet"),
+    "study": ("femcontact.study.command", "run the cases of a study that are not done yet"),
     "report": ("femcontact.study.report", "write the plots, snapshots and summary of a study"),
     "rcc": ("femcontact.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
+    "whitney": ("femcontact.cli.whitney", "compliantly supported rigid-peg insertion (Whitney), analytic"),
+    "hertz": ("femcontact.cli.hertz", "Hertz benchmark (reference §5) at one contact-zone size"),
 }
 
 
@@ -26,6 +29,9 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 def main(argv=None) -> int:
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
+    # FFCx's JIT compiles through setuptools, which logs every compiler call at INFO on the root
+    # logger: keep warnings and errors only, so a run's output is its progress
+    logging.getLogger().addFilter(lambda record: record.levelno >= logging.WARNING)
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = argparse.ArgumentParser(prog="femcontact", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -41,8 +47,21 @@ def main(argv=None) -> int:
     try:
         return module.command(args) or 0
     except InputError as error:
-        print(f"femcontact {argv[0]}: error: {error}", file=sys.stderr)
+        if launch_rank() == 0:  # under mpirun every rank finds the same error: one message
+            print(f"femcontact {argv[0]}: error: {error}", file=sys.stderr)
         return 2
+
+
+RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+"""Where MPI launchers (Open MPI, PMIx, MPICH/Hydra) put a process's rank, before MPI starts."""
+
+
+def launch_rank() -> int:
+    """This process's rank in its MPI launch, read from the launcher's environment (0 outside one)."""
+    for name in RANK_VARIABLES:
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
 
 
 if __name__ == "__main__":

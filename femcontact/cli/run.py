@@ -4,16 +4,21 @@ The case directory holds the resolved scene (`scene.json`), `history.csv` (one r
 converged increment, streamed), `fields.npz` and, written atomically as the very last
 thing, `result.json`:
 {"status": "ok"|"failed", "reason": str|null, "metrics": {...}, "timings": {...}, "info": {...}}.
-Progress goes to standard error (`--quiet` silences it and the summary).
-Exit code 0 when ok, 1 when the simulation failed (reason recorded), 2 for bad input.
+A metric that is undefined (NaN or infinite) is written as null and listed in
+`info.undefined_metrics`. Progress goes to standard error (`--quiet` silences it and the summary).
+Exit code 0 when ok, 1 when the simulation failed (reason recorded), 2 for bad input or an
+output directory that cannot be written (one message naming it).
 """
+import json
+import math
 import sys
 import time
 import traceback
 from pathlib import Path
 
 from femcontact.config.scene import case_id, load_scene
-from femcontact.io import write_json_atomic
+from femcontact.errors import InputError
+from femcontact.io import WriteError, describe, make_dir, write_json_atomic
 
 
 def add_arguments(parser):
@@ -29,18 +34,45 @@ def add_arguments(parser):
                              "steps after the ones it holds")
 
 
+def check_restart(scene: dict, checkpoint: bool, restart, ranks: int) -> None:
+    """Refuse --checkpoint/--restart requests that cannot work, before anything is written."""
+    if scene["kind"] == "rcc" and (checkpoint or restart):
+        raise InputError("--checkpoint/--restart: an rcc case has no steps to share")
+    if restart is None:
+        return
+    path = Path(restart) / "checkpoint.json"
+    try:
+        meta = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise InputError(f"--restart {restart}: no readable checkpoint ({path}: "
+                         f"{getattr(error, 'strerror', None) or error})") from None
+    if meta.get("ranks") != ranks:
+        raise InputError(f"--restart {restart}: written on {meta.get('ranks')} ranks, run on {ranks}")
+    if not 0 < meta.get("steps", 0) < len(scene["steps"]):
+        raise InputError(f"--restart {restart}: holds {meta.get('steps')} step(s); the scene has "
+                         f"{len(scene['steps'])}, so no later step would run")
+
+
 def command(args) -> int:
+    scene = load_scene(args.scene, args.set)  # bad input is refused before MPI starts
     from mpi4py import MPI
 
     from femcontact.scenarios.case import run_case
 
-    scene = load_scene(args.scene, args.set)
-    rank = MPI.COMM_WORLD.rank
+    comm = MPI.COMM_WORLD
+    check_restart(scene, args.checkpoint, args.restart, comm.size)
     case_dir = Path(args.out or Path("results", "run", case_id(scene)))
-    if rank == 0:
-        case_dir.mkdir(parents=True, exist_ok=True)
-        write_json_atomic(case_dir / "scene.json", scene)
-    MPI.COMM_WORLD.barrier()
+    problem = None
+    if comm.rank == 0:
+        try:
+            make_dir(case_dir)
+            (case_dir / "result.json").unlink(missing_ok=True)  # a stale result must not outlive this run
+            write_json_atomic(case_dir / "scene.json", scene)
+        except (WriteError, OSError) as error:
+            problem = error if isinstance(error, WriteError) else WriteError(describe(error, case_dir))
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise problem
     start = time.perf_counter()
     try:
         result = {"status": "ok", "reason": None,
@@ -48,15 +80,18 @@ def command(args) -> int:
     except Exception as error:  # recorded, never a half-written result
         from femcontact.solver.stepping import SimulationFailed
 
-        reason = f"{type(error).__name__}: {error}"
-        info = {} if isinstance(error, SimulationFailed) else {"traceback": traceback.format_exc()}
+        clear = isinstance(error, (SimulationFailed, WriteError))  # their message says it all
+        reason = str(error) if isinstance(error, WriteError) else f"{type(error).__name__}: {error}"
+        info = {} if clear else {"traceback": traceback.format_exc()}
         result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {}, "info": info}
         print(f"femcontact run: case failed: {reason}", file=sys.stderr)
         if "traceback" in info:
             print(info["traceback"], file=sys.stderr)
     result["timings"]["total"] = time.perf_counter() - start
-    result["info"]["ranks"] = MPI.COMM_WORLD.size
-    if rank == 0:
+    result["info"]["ranks"] = comm.size
+    result["info"]["undefined_metrics"] = sorted(  # written as null: e.g. a contact centre without contact
+        name for name, value in result["metrics"].items() if isinstance(value, float) and not math.isfinite(value))
+    if comm.rank == 0:
         write_json_atomic(case_dir / "result.json", result)
         if not args.quiet:
             print_summary(result, case_dir)

@@ -12,6 +12,15 @@ A scene file (TOML) describes one simulation. `kind` selects the schema: `contac
 contact solver; `geometry` = `peg_in_hole`, `block` or `snap_fit`) or `rcc` (the RCC truss). Every key is validated
 on load and with `--set KEY=VALUE`: an unknown key, a wrong type or an out-of-range value is one clear
 error naming the key, the value and what is allowed (exit code 2, no traceback).
+Every number must be finite (`nan` and `inf` are refused for every key). Also refused before
+anything runs (and in a study's pre-validation of every case): `steps = []`, two steps with one
+name (names key the metrics), a `load_point` that names no point of the geometry (peg_in_hole:
+`peg_tip`, `peg_top`, `contact_A`, `contact_B`, `reference`; block: `indenter` (the default there),
+`contact`, `reference`), `solver.petsc_options` that are not linear-solver options (`ksp_*`, `pc_*`,
+`mat_*`, scalar finite values) or whose `ksp_type`, `pc_type` or `pc_factor_mat_solver_type` names no
+KSP, PC or factorisation package of the installed PETSc, and sizes that make the mesh too large or
+too coarse (docs/geometry.md, "Mesh-size guard"). A scene file that is not UTF-8, is a directory
+or is missing is one error naming the file.
 Generated from the schemas (`femcontact/config/scene.py`, `femcontact/rcc/device.py`) by
 `python -m femcontact.config.docs > docs/scenes.md`.
 """

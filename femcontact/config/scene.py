@@ -6,11 +6,14 @@ it calls for, and its load steps. `load_scene` returns the fully resolved scene
 (every default filled in); `case_id` hashes it, so two files that differ only in
 key order or formatting describe the same case.
 """
+import functools
 import hashlib
 import json
+import math
 import tomllib
 from pathlib import Path
 
+from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from geometry import snap_fit as snap_fit_geometry
@@ -141,7 +144,8 @@ SOLVER = {
                   "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
                   positive=True),
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
-    "line_search": Field("bool", True, "backtracking line search on the residual norm"),
+    "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
+                         "root of R.d or backtracking"),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }
@@ -162,6 +166,9 @@ def contact_schema(dim: int, geometry: str) -> dict:
     """Schema of a contact scene for the given dimension and geometry."""
     schema = {
         "kind": Field("str", "contact", choices=("contact", "rcc")),
+        "accuracy": Field("str", "custom", "preset of mesh and solver keys the scene leaves unset "
+                          "(docs/accuracy.md): 'fast', 'balanced', 'accurate', or 'custom' (none)",
+                          choices=tuple(PRESETS)),
         "name": Field("str", "scene", "scene name"),
         "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
         "geometry": Field("str", "peg_in_hole", "'peg_in_hole', 'block' (a block under a rigid indenter) or "
@@ -191,6 +198,9 @@ def contact_schema(dim: int, geometry: str) -> dict:
         schema.update(peg=PIN, spring=SPRING, materials={"peg": _material(), "spring": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
+        step = {**STEP, "load_point": Field("str", "indenter", "named point where the force acts: 'indenter' "
+                                            "(its reference point), 'contact' or 'reference'")}
+        schema["steps"] = TableList(step, schema["steps"].doc)
     return schema
 
 
@@ -202,6 +212,14 @@ def _check_contact(scene: dict) -> None:
     if dim == 3 and {"plane_strain", "plane_stress"} & set(effects):
         problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
     moment_length = 1 if dim == 2 else 3
+    if not scene["steps"]:
+        problems.append("steps = []: a contact scene needs at least one [[steps]] table")
+    names = [step["name"] for step in scene["steps"]]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            problems.append(f"steps[{i}].name = {name!r}: also the name of steps[{names.index(name)}] "
+                            "(step names key the metrics, they must differ)")
+    problems += petsc_option_problems(scene["solver"]["petsc_options"])
     for i, step in enumerate(scene["steps"]):
         if step["force"] and len(step["force"]) != dim:
             problems.append(f"steps[{i}].force = {step['force']}: expected {dim} components")
@@ -222,6 +240,79 @@ def _check_contact(scene: dict) -> None:
         if scene["peg"]["nose"] == "points" and not scene["peg"]["nose_points"]:
             raise InputError("peg.nose_points: missing (required for peg.nose = 'points')")
         snap_fit_geometry.layout(scene)  # refuses a spring that cannot meet the nose
+    from geometry.model import check_mesh, points
+
+    known = sorted([*points(scene), "reference"])
+    for i, step in enumerate(scene["steps"]):
+        if step["load_point"] not in known:
+            raise InputError(f"steps[{i}].load_point = {step['load_point']!r}: unknown point, expected one of "
+                             + ", ".join(known))
+    check_mesh(scene)  # an element-count estimate: a mesh too large or too coarse is refused before gmsh runs
+
+
+PETSC_FAMILIES = ("ksp_", "pc_", "mat_", "mg_")  # mg_levels_* and mg_coarse_* tune multigrid levels
+
+
+def petsc_option_problems(options: dict) -> list[str]:
+    """Complaints about solver.petsc_options: prefix-free names of linear-solver options (ksp_*, pc_*, mg_*,
+    mat_*), scalar finite values, and ksp_type, pc_type, pc_factor_mat_solver_type naming a KSP, PC and
+    factorisation package this PETSc has."""
+    problems = []
+    for key, value in options.items():
+        name = f"solver.petsc_options.{key}"
+        if not key.startswith(PETSC_FAMILIES):
+            problems.append(f"{name}: not a linear-solver option (expected a name starting with "
+                            f"{', '.join(PETSC_FAMILIES)}, without '-' or a prefix)")
+        elif not isinstance(value, (str, int, float, bool)):
+            problems.append(f"{name} = {value!r}: expected a string, number or true/false")
+        elif isinstance(value, float) and not math.isfinite(value):
+            problems.append(f"{name} = {value!r}: not a finite number")
+    kinds = {"ksp_type": "KSP", "pc_type": "PC", "pc_factor_mat_solver_type": "Mat.Solver"}
+    for key, kind in kinds.items():
+        value = options.get(key)
+        if value is None:
+            continue
+        known = _petsc_names(kind)
+        if value not in known:
+            problems.append(f"solver.petsc_options.{key} = {value!r}: names no {kind.split('.')[0]} type of PETSc "
+                            f"(known: {', '.join(sorted(known))})")
+        elif key == "pc_factor_mat_solver_type" and not _factorization_available(value):
+            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it "
+                            "(not built in)")
+    return problems
+
+
+@functools.lru_cache
+def _petsc_names(kind: str) -> frozenset:
+    from petsc4py import PETSc
+
+    table = {"KSP": PETSc.KSP.Type, "PC": PETSc.PC.Type, "Mat.Solver": PETSc.Mat.SolverType}[kind]
+    return frozenset(value for name, value in vars(table).items()
+                     if not name.startswith("_") and isinstance(value, str))
+
+
+@functools.lru_cache
+def _factorization_available(package: str) -> bool:
+    """Whether PETSc can LU-factor a 2x2 matrix with `package` (a few ms)."""
+    from petsc4py import PETSc
+
+    matrix = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
+    for i in range(2):
+        matrix.setValue(i, i, 1.0)
+    matrix.assemble()
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOperators(matrix)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType(package)
+    try:
+        ksp.setUp()
+        return True
+    except PETSc.Error:
+        return False
+    finally:
+        ksp.destroy()
+        matrix.destroy()
 
 
 def resolve(data: dict, overrides=()) -> dict:
@@ -240,6 +331,8 @@ def resolve(data: dict, overrides=()) -> dict:
         raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc'")
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
                     {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
+    if isinstance(data.get("accuracy"), str):
+        apply_preset(data)
     scene = validate(data, contact_schema(head["dim"], head["geometry"]))
     _check_contact(scene)
     return scene
@@ -248,9 +341,16 @@ def resolve(data: dict, overrides=()) -> dict:
 def read_toml(path) -> dict:
     path = Path(path)
     try:
-        return tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: a directory, expected a TOML file") from None
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not a UTF-8 text file (byte {error.start}: {error.reason}); "
+                         "TOML files are UTF-8") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror or error})") from None
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: not valid TOML: {error}") from None
 

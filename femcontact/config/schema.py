@@ -5,6 +5,7 @@ A schema is a dict mapping keys to `Field`s, to nested schemas (sub-tables) or t
 copy (defaults filled in) or raises one `InputError` listing every problem, each
 naming the dotted key, the bad value and what is allowed.
 """
+import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -16,7 +17,8 @@ REQUIRED = object()
 @dataclass(frozen=True)
 class Field:
     """One scene value. `kind` is 'float', 'int', 'str', 'bool', 'floats' (list of numbers),
-    'strs' (list of strings) or 'any'. Units go in `doc`."""
+    'strs' (list of strings) or 'any'. Units go in `doc`. Numbers must be finite (no NaN,
+    no infinity) unless `finite` is False."""
     kind: str
     default: Any = REQUIRED
     doc: str = ""
@@ -25,6 +27,7 @@ class Field:
     max: float | None = None
     positive: bool = False
     length: int | None = None
+    finite: bool = True
     check: Callable[[Any], str | None] | None = None  # returns a complaint or None
 
     def allowed(self) -> str:
@@ -90,6 +93,8 @@ def _field_errors(value, field: Field) -> str | None:
         return f"has length {len(value)}"
     numbers = value if field.kind == "floats" else [value] if field.kind in ("float", "int") else []
     for number in numbers:
+        if field.finite and not math.isfinite(number):
+            return "not a finite number"
         if field.positive and not number > 0:
             return "out of range"
         if field.min is not None and number < field.min:

@@ -22,7 +22,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
-from femcontact.physics.signed_distance import reference_point
+from femcontact.physics.rotation import rotation_numpy
 
 
 def corner_points(rigid: dict) -> np.ndarray:
@@ -48,12 +48,13 @@ class RigidCorners(Effect):
         self.points = corner_points(p.model.rigid)
         self.friction = "friction" in p.effects
         self.segments = self._segments()
+        self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
         self.active_count = 0
         self.search = 4 * p.model.h_contact
         n = len(self.points)
         self.tangential_old = np.zeros(n)
         self.tangential = np.zeros(n)
-        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]) if n else np.zeros((0, 2))
+        self.corner_old = self._placed()
         self.u_old = p.u.x.array.copy()
         self.active = np.zeros(n, dtype=bool)
 
@@ -75,6 +76,12 @@ class RigidCorners(Effect):
                 dofs = p.V.dofmap.cell_dofs(cell)
                 rows.append([dofs[(local + 1) % 3], dofs[(local + 2) % 3], dofs[local]])
         return np.array(rows, dtype=np.int32).reshape(-1, 3)
+
+    def _placed(self, values=None) -> np.ndarray:
+        """Current positions of all corners (mm) for the pose `values` (default: the current one)."""
+        rigid = self.problem.rigid
+        t, angles = rigid.split(rigid.values if values is None else values)
+        return rigid.p0 + np.asarray(t) + self.points @ (rotation_numpy(angles) @ rigid.Q0).T
 
     # -- the element ------------------------------------------------------------------
     def _force(self, k: int, corner: np.ndarray, xa, xb, xc, s_fixed=None, state=None):
@@ -99,45 +106,51 @@ class RigidCorners(Effect):
             kappa_t = float(p.constants["gamma_t"].value * p.constants["E"].value)
             trial = self.tangential_old[k] - kappa_t * (slip @ tangent)
             bound = float(p.constants["mu"].value) * f_n
-            stick = abs(trial) <= bound if state is None else state[1]
+            stick = abs(trial) < bound if state is None else state[1]  # a corner at the bound keeps slipping
             f_t = trial if stick else np.sign(trial if state is None else state[2]) * bound
             force = force + f_t * tangent
             return force, s, gap, (active, stick, np.sign(trial)), f_t
         return force, s, gap, (active, True, 0.0), f_t
 
-    def _find(self, corner: np.ndarray, u: np.ndarray):
-        """Best segment on this rank: (distance, row) with the corner projecting inside it."""
+    def _find(self, corners: np.ndarray, u: np.ndarray):
+        """Best segment on this rank for each corner: (distances, rows), the corner projecting
+        inside the segment and within the search distance (else inf, -1)."""
+        n = len(corners)
         if not len(self.segments):
-            return np.inf, -1
-        x = self.coordinates + u.reshape(-1, 2)
-        xa, xb = x[self.segments[:, 0]], x[self.segments[:, 1]]
+            return np.full(n, np.inf), np.full(n, -1)
+        u = u.reshape(-1, 2)
+        a, b = self.segments[:, 0], self.segments[:, 1]
+        xa, xb = self.coordinates[a] + u[a], self.coordinates[b] + u[b]
         edge = xb - xa
         length2 = np.einsum("ij,ij->i", edge, edge)
-        t = np.einsum("ij,ij->i", corner - xa, edge) / length2
-        distance = np.abs(np.cross(edge, corner - xa)) / np.sqrt(length2)
+        arm = corners[:, None, :] - xa[None, :, :]  # corners x segments x 2
+        t = np.einsum("csj,sj->cs", arm, edge) / length2
+        distance = np.abs(edge[None, :, 0] * arm[:, :, 1] - edge[None, :, 1] * arm[:, :, 0]) / np.sqrt(length2)
         distance[(t < -1e-9) | (t > 1 + 1e-9) | (distance > self.search)] = np.inf
-        row = int(np.argmin(distance))
-        return (float(distance[row]), row) if np.isfinite(distance[row]) else (np.inf, -1)
+        rows = np.argmin(distance, axis=1)
+        best = distance[np.arange(n), rows]
+        return best, np.where(np.isfinite(best), rows, -1)
 
     def contributions(self, with_jacobian: bool):
         """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""
         p = self.problem
-        self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
         u = p.u.x.array
         comm = p.mesh.comm
         out = []
-        for k, point in enumerate(self.points):
-            corner = p.rigid.place(point + _tip(p))
-            distance, row = self._find(corner, u)
-            owner = int(np.argmin(comm.allgather(distance)))
-            self.active[k] = False
-            if comm.rank != owner or row < 0:
+        corners = self._placed()
+        distances, rows = self._find(corners, u)
+        owners = np.zeros(len(rows), dtype=int)
+        if comm.size > 1:
+            owners = np.argmin(np.array(comm.allgather(distances)).reshape(comm.size, -1), axis=0)
+        self.active[:] = False
+        for k, row in enumerate(rows):
+            if comm.rank != owners[k] or row < 0:
                 continue
             a, b, c = self.segments[row]
             self._old_segment = (self.coordinates[a] + self.u_old[2 * a: 2 * a + 2],
                                  self.coordinates[b] + self.u_old[2 * b: 2 * b + 2])
             xa, xb, xc = (self.coordinates[i] + u[2 * i: 2 * i + 2] for i in (a, b, c))
-            force, s, gap, state, f_t = self._force(k, corner, xa, xb, xc)
+            force, s, gap, state, f_t = self._force(k, corners[k], xa, xb, xc)
             if not state[0]:
                 continue
             self.active[k] = True
@@ -146,12 +159,12 @@ class RigidCorners(Effect):
             entries = np.r_[(1 - s) * force, s * force]
             dC_du = dC_dr = None
             if with_jacobian:
-                dC_du, dC_dr = self._derivatives(k, point, (a, b, c), state)
+                dC_du, dC_dr = self._derivatives(k, (a, b, c), state)
             out.append((dofs, entries, dC_du, dC_dr))
         active = comm.allreduce(int(self.active.sum()), op=MPI.SUM)
         return out, active
 
-    def _derivatives(self, k, point, nodes, state, h=1e-9):
+    def _derivatives(self, k, nodes, state, h=1e-9):
         """Central differences of the C entries in the 4 segment dofs and the rigid dofs."""
         p = self.problem
         a, b, c = nodes
@@ -160,7 +173,7 @@ class RigidCorners(Effect):
         r0 = p.rigid.values.copy()
 
         def entries(dx_a, dx_b, r):
-            corner = p.rigid.place(point + _tip(p), r)
+            corner = self._placed(r)[k]
             force, s, *_ = self._force(k, corner, x[a] + dx_a, x[b] + dx_b, x[c], state=state)
             return np.r_[(1 - s) * force, s * force]
 
@@ -202,7 +215,7 @@ class RigidCorners(Effect):
     def commit(self, dt: float) -> None:
         p = self.problem
         self.tangential_old[:] = np.where(self.active, self.tangential, 0.0)
-        self.corner_old = np.array([p.rigid.place(pt + _tip(p)) for pt in self.points]).reshape(-1, 2)
+        self.corner_old = self._placed()
         self.u_old = p.u.x.array.copy()
 
     def state(self) -> dict:
@@ -216,7 +229,3 @@ class RigidCorners(Effect):
     def outputs(self) -> dict:
         return {"corner_contacts": self.active_count}
 
-
-def _tip(problem) -> np.ndarray:
-    """Offset from the reference-point frame to the tip-centred frame used by RigidBody.place."""
-    return reference_point(problem.model.rigid)

@@ -10,6 +10,8 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
+from femcontact.errors import InputError
+from femcontact.io import write_npz_atomic
 from femcontact.physics.signed_distance import outline
 
 
@@ -37,27 +39,15 @@ def write_fields(simulation, case_dir: Path) -> None:
     displacement[:, : p.dim] = u1.x.array.reshape(-1, p.dim)
     local = (points, cells, displacement, von_mises.x.array[:n_cells].copy())
     gathered = comm.gather(local, root=0)
+    error = None
     if comm.rank == 0:
-        offsets = np.cumsum([0] + [len(g[0]) for g in gathered])
-        rigid = p.rigid
-        shape_outline = outline(p.model.rigid)
-        if len(shape_outline):
-            from femcontact.physics.signed_distance import reference_point
-
-            local_points = shape_outline[:, : p.dim] + reference_point(p.model.rigid)
-            placed = np.array([rigid.place(point) for point in local_points])
-            shape_outline = np.c_[placed, np.zeros((len(placed), 3 - p.dim))]
-        np.savez_compressed(
-            Path(case_dir) / "fields.npz",
-            points=np.vstack([g[0] for g in gathered]),
-            cells=np.vstack([g[1] + offset for g, offset in zip(gathered, offsets)]),
-            cell_type="triangle" if p.dim == 2 else "tetra",
-            displacement=np.vstack([g[2] for g in gathered]),
-            von_mises=np.concatenate([g[3] for g in gathered]),
-            rigid_outline=shape_outline,
-            named_point_names=np.array(list(p.model.points)),
-            named_point_coords=np.array([np.r_[x, np.zeros(3 - p.dim)] for x in p.model.points.values()]),
-        )
+        try:
+            _write_npz(p, gathered, case_dir)
+        except InputError as failure:  # a WriteError: every rank stops, none waits below
+            error = failure
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise error
     if p.scene["outputs"]["fields"]:
         from dolfinx.io import XDMFFile
 
@@ -66,3 +56,27 @@ def write_fields(simulation, case_dir: Path) -> None:
             xdmf.write_function(u1)
             xdmf.write_function(von_mises)
     comm.barrier()
+
+
+def _write_npz(p, gathered, case_dir: Path) -> None:
+    """fields.npz from the gathered (points, cells, displacement, von Mises) of every rank (rank 0)."""
+    offsets = np.cumsum([0] + [len(g[0]) for g in gathered])
+    rigid = p.rigid
+    shape_outline = outline(p.model.rigid)
+    if len(shape_outline):
+        from femcontact.physics.signed_distance import reference_point
+
+        local_points = shape_outline[:, : p.dim] + reference_point(p.model.rigid)
+        placed = np.array([rigid.place(point) for point in local_points])
+        shape_outline = np.c_[placed, np.zeros((len(placed), 3 - p.dim))]
+    write_npz_atomic(
+        Path(case_dir) / "fields.npz",
+        points=np.vstack([g[0] for g in gathered]),
+        cells=np.vstack([g[1] + offset for g, offset in zip(gathered, offsets)]),
+        cell_type="triangle" if p.dim == 2 else "tetra",
+        displacement=np.vstack([g[2] for g in gathered]),
+        von_mises=np.concatenate([g[3] for g in gathered]),
+        rigid_outline=shape_outline,
+        named_point_names=np.array(list(p.model.points)),
+        named_point_coords=np.array([np.r_[x, np.zeros(3 - p.dim)] for x in p.model.points.values()]),
+    )

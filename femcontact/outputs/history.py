@@ -1,26 +1,52 @@
-"""`history.csv`, streamed: one flushed row per converged increment, so a run that is
-killed or fails keeps every increment it finished (written on rank 0)."""
+"""`history.csv`, streamed: one row per converged increment, handed to the kernel at once, so
+a run that is killed or fails keeps every increment it finished (written on rank 0)."""
 import csv
+import io
+import os
 from pathlib import Path
+
+from femcontact.io import WriteError, describe
 
 
 class HistoryWriter:
-    """Appends rows to a CSV file; the first row fixes the columns."""
+    """Appends rows to a CSV file; the first row fixes the columns. A failed write (disk full,
+    read-only) cuts the file back to its last whole row, stops the writing and is kept in
+    `error` (a WriteError naming the file) for the caller to raise on every rank once the
+    ranks are in step."""
 
     def __init__(self, path: Path, rank: int = 0):
         self.path, self.rank = Path(path), rank
-        self.stream = self.writer = None
+        self.fd = self.columns = None
+        self.written = 0  # bytes of whole rows in the file
+        self.error = None
 
     def __call__(self, row: dict, cuts: int = 0) -> None:
-        if self.rank != 0:
+        if self.rank != 0 or self.error is not None:
             return
-        if self.writer is None:
-            self.stream = open(self.path, "w", newline="")
-            self.writer = csv.DictWriter(self.stream, fieldnames=list(row), extrasaction="ignore")
-            self.writer.writeheader()
-        self.writer.writerow(row)
-        self.stream.flush()
+        text = io.StringIO()
+        writer = csv.DictWriter(text, fieldnames=self.columns or list(row), extrasaction="ignore")
+        if self.columns is None:
+            writer.writeheader()
+        writer.writerow(row)
+        data = text.getvalue().encode()
+        try:
+            if self.fd is None:
+                self.fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+                self.columns = list(row)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(self.fd, view):]
+        except OSError as error:
+            self.error = WriteError(describe(error, self.path))
+            if self.fd is not None:
+                try:
+                    os.ftruncate(self.fd, self.written)  # no half row
+                except OSError:
+                    pass
+            return
+        self.written += len(data)
 
     def close(self) -> None:
-        if self.stream is not None:
-            self.stream.close()
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None

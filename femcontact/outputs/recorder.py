@@ -108,7 +108,7 @@ class Recorder:
             centre = np.array([self._sum((x[mask, k] * weight).sum()) for k in range(dim)]) / (total or 1.0)
             for k, axis in enumerate("xyz"[:dim]):
                 row[f"contact_{zone}_F{axis}"] = force[k]
-                row[f"contact_{zone}_{axis}"] = centre[k] if total > 0 else np.nan
+                row[f"contact_{zone}_{axis}"] = centre[k] if total > 0 else None  # no contact: no centre
             row[f"contact_{zone}_force"] = float(np.linalg.norm(force))
 
         nodal = self.nodal_values()

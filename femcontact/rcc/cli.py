@@ -74,6 +74,8 @@ def _device(args) -> rcc.Rcc:
 
 def command(args) -> int:
     device = _device(args)
+    if not math.isfinite(getattr(args, "about_z", 0.0)):
+        raise InputError(f"--about-z {args.about_z}: must be a finite number")
     if args.action == "wrench":
         motion = parse_components(args.move, rcc.DOFS, "--move")
         result = dict(zip(rcc.WRENCH, rcc.wrench(device, motion, args.about_z, args.model)))

@@ -44,6 +44,10 @@ class Rcc:
     offset_t: float = 0.0
 
     def __post_init__(self):
+        for name, value in (("b", self.b), ("peg length L", self.peg_length), ("theta_L", self.theta_l),
+                            ("k", self.k), ("offset T", self.offset_t)):
+            if not math.isfinite(value):
+                raise InputError(f"{name} = {value}: must be a finite number")
         if not 0.0 < self.theta_l < 90.0:
             raise InputError(f"theta_L = {self.theta_l} deg: must lie in (0, 90)")
         if not self.b > 0.0:

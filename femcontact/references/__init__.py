@@ -1,1 +1,1 @@
-"""Closed forms from the references (peg-in-hole geometry and wedging, Hertz)."""
+"""Closed forms from the references (peg-in-hole geometry and wedging, Hertz, Whitney's compliant insertion)."""

@@ -59,6 +59,9 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     finally:
         for listener in listeners:
             listener.close()
+    error = MPI.COMM_WORLD.bcast(history.error, root=0)  # a full disk stops every rank, none waits below
+    if error is not None:
+        raise error
     if checkpoint:
         simulation.save_checkpoint(case_dir / "checkpoint")
     start = time.perf_counter()
@@ -75,8 +78,6 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
     """Run a resolved scene of any kind; returns {'metrics', 'timings', 'info'} or raises
     SimulationFailed."""
     if scene["kind"] == "rcc":
-        if checkpoint or restart:
-            raise InputError("--checkpoint/--restart: an rcc case has no steps to share")
         from femcontact.rcc.device import run_case as run_rcc
 
         return run_rcc(scene)

@@ -45,7 +45,9 @@ BOUNDARY_BAND = 0.05      # |l_d - bound| / l_max below which a case counts as "
 
 
 def _vector(row: dict, prefix: str, dim: int) -> np.ndarray:
-    return np.array([row.get(f"{prefix}_{axis}", np.nan) for axis in "xyz"[:dim]])
+    """A vector of a history row; nan for components the row leaves empty (None)."""
+    values = [row.get(f"{prefix}_{axis}") for axis in "xyz"[:dim]]
+    return np.array([np.nan if value is None else value for value in values], dtype=float)
 
 
 def _loaded(row: dict, dim: int) -> bool:
@@ -103,15 +105,17 @@ def wedge_metrics(simulation) -> dict:
     point_A = _vector(final, "contact_A", dim)
     point_B = _vector(final, "contact_B", dim)
     line = point_B - point_A
-    angles = []
-    for vector in (R_A, R_B):
-        cosine = abs(vector @ line) / max(np.linalg.norm(vector) * np.linalg.norm(line), 1e-300)
-        angles.append(float(np.degrees(np.arccos(np.clip(cosine, -1, 1)))) if np.all(np.isfinite(line)) else np.nan)
+    angles = [None, None]  # undefined (JSON null) when a zone has lost contact: no line of the contact points
+    if np.all(np.isfinite(line)):
+        angles = [float(np.degrees(np.arccos(np.clip(abs(vector @ line) / max(
+            np.linalg.norm(vector) * np.linalg.norm(line), 1e-300), -1, 1)))) for vector in (R_A, R_B)]
     out["angle_A_deg"], out["angle_B_deg"] = angles
+    out["angle_reason"] = None if angles[0] is not None else \
+        "zone " + " and ".join(z for z, p in (("A", point_A), ("B", point_B)) if not np.all(np.isfinite(p))) \
+        + " has no contact after release: the angles to the line of the contact points are undefined"
     out["elastic_energy"] = final["elastic_energy"]
     out["max_von_mises"] = max(row["max_von_mises"] for row in history)
-    out["yield_ratio"] = out["max_von_mises"] / scene["materials"]["hole" if scene["rigid"] == "peg" else "peg"][
-        "yield_stress"]
+    out["yield_ratio"] = out["max_von_mises"] / scene["materials"][simulation.problem.deformable]["yield_stress"]
     scale = load_scale(scene, history)
     out["load_scale"] = scale
     out["residual_over_load"] = out["residual_force_A"] / scale if scale > 0 else math.inf
@@ -121,7 +125,7 @@ def wedge_metrics(simulation) -> dict:
         reason = "no equilibrium after release (stabilised state)"
     elif not out["imbalance"] < IMBALANCE_TOL:
         reason = "unbalanced"
-    elif not max(angles) <= ANGLE_TOL_DEG:
+    elif angles[0] is None or not max(angles) <= ANGLE_TOL_DEG:
         reason = "not collinear"
     else:
         reason = "wedged"

@@ -17,9 +17,9 @@ import numpy as np
 from mpi4py import MPI
 
 from femcontact.errors import InputError
-from femcontact.io import write_json_atomic
+from femcontact.io import write_json_atomic, write_npz_atomic
 
-STABILIZATION_FACTORS = (1.0, 1e-2, 1e-4, 1e-6, 0.0)
+STABILIZATION_FACTORS = (1.0, 1e-1, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
 STABILIZATION_TOLERANCE = 1e-3
 """Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
@@ -86,7 +86,7 @@ class Simulation:
         if comm.rank == 0:
             directory.mkdir(parents=True, exist_ok=True)
         comm.barrier()
-        np.savez(directory / f"rank{comm.rank}.npz", **self.problem.state())
+        write_npz_atomic(directory / f"rank{comm.rank}.npz", compressed=False, **self.problem.state())
         if comm.rank == 0:
             write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
                                                               "history": self.history})

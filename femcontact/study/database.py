@@ -17,9 +17,12 @@ Table `cases`, columns in CSV order:
 import contextlib
 import csv
 import json
+import os
 import sqlite3
 import tomllib
 from pathlib import Path
+
+from femcontact.io import WriteError, write_atomic
 
 HEAD = ("case_id", "status")
 INFO = ("ranks", "dofs", "newton_iterations", "active_effects", "reason")
@@ -71,8 +74,15 @@ class Database:
     def __init__(self, path, parameters: list[str]):
         self.path = Path(path)
         self.parameters = list(parameters)
-        self.connection = sqlite3.connect(self.path, isolation_level=None)  # explicit transactions
-        self.connection.execute("PRAGMA journal_mode=WAL")
+        try:
+            self.connection = sqlite3.connect(self.path, isolation_level=None)  # explicit transactions
+            self.connection.execute("PRAGMA journal_mode=WAL")
+        except sqlite3.Error as error:
+            where = "" if os.access(self.path.parent, os.W_OK) else f"; {self.path.parent} is not writable"
+            raise WriteError(f"{self.path}: cannot write the results database ({error}{where})") from None
+
+    def close(self) -> None:
+        self.connection.close()
 
     def columns(self) -> list[str]:
         return [row[1] for row in self.connection.execute("PRAGMA table_info(cases)")]
@@ -104,13 +114,18 @@ class Database:
 
     @contextlib.contextmanager
     def _transaction(self):
-        self.connection.execute("BEGIN IMMEDIATE")
+        """All or nothing; a failed write (disk full, read-only) rolls back and raises WriteError."""
         try:
+            self.connection.execute("BEGIN IMMEDIATE")
             yield
-        except BaseException:
-            self.connection.execute("ROLLBACK")
+            self.connection.execute("COMMIT")
+        except BaseException as error:
+            with contextlib.suppress(sqlite3.Error):
+                if self.connection.in_transaction:
+                    self.connection.execute("ROLLBACK")
+            if isinstance(error, sqlite3.Error):
+                raise WriteError(f"{self.path}: cannot write the results database ({error})") from None
             raise
-        self.connection.execute("COMMIT")
 
     def csv_columns(self) -> list[str]:
         """Columns in export order: head, parameters, metrics, timings, info, provenance (no scene)."""
@@ -130,12 +145,12 @@ class Database:
 
     def export_csv(self, path) -> Path:
         """Write the rows to CSV (atomically) and return its path."""
-        path = Path(path)
         columns = self.csv_columns()
-        tmp = path.with_name(f".{path.name}.tmp")
-        with open(tmp, "w", newline="") as stream:
+        rows = self.rows(columns)
+
+        def write(stream):
             writer = csv.DictWriter(stream, columns)
             writer.writeheader()
-            writer.writerows(self.rows(columns))
-        tmp.replace(path)
-        return path
+            writer.writerows(rows)
+
+        return write_atomic(path, write)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.io import write_json_atomic
+from femcontact.io import WriteError, describe, make_dir, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.config.scene import case_id, read_toml, resolve
 
@@ -46,7 +46,8 @@ SCHEMA = {
         "ranks_per_case": Field("int", 1, "MPI ranks per case", min=1),
         "time_limit": Field("float", 600.0, "seconds per case; a case past it is killed and recorded failed",
                             positive=True),
-        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks"),
+        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
+                          check=lambda v: _check_launcher(v)),
         "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
     },
     "scene": _TABLE,
@@ -80,7 +81,22 @@ SCHEMA = {
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
     },
+    "report": {
+        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
+                         "default: swept keys, status, the family's primary metrics, wall time)",
+                         check=lambda v: _check_columns(v)),
+    },
 }
+MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
+
+
+def _check_columns(columns: list[str]) -> str | None:
+    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
+    if bad:
+        return f"column {bad[0]!r} is empty or repeated"
+    if len(columns) > MAX_COLUMNS:
+        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
+    return None
 
 
 def flatten(table: dict, prefix: str = "") -> dict:
@@ -103,6 +119,19 @@ def _check_lists(table, same_length: bool) -> str | None:
         return f"{bad[0]} must be a non-empty list of values"
     if same_length and len({len(values) for values in lists.values()}) > 1:
         return "zipped lists must have one length: " + ", ".join(f"{k} has {len(v)}" for k, v in lists.items())
+    return None
+
+
+def _check_launcher(launcher: str) -> str | None:
+    """A complaint about a launcher command, or None: it must format with {ranks} alone and name a program."""
+    import shutil
+
+    try:
+        words = shlex.split(launcher.format(ranks=1))
+    except (KeyError, IndexError, ValueError) as error:
+        return f"cannot be read ({type(error).__name__}: {error}); the only placeholder is {{ranks}}"
+    if words and shutil.which(words[0]) is None:
+        return f"{words[0]!r}: no such program"
     return None
 
 
@@ -131,6 +160,7 @@ class Study:
     results: Path
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -198,7 +228,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         case.params = {key: get_key(case.scene, key) for key in keys}
     if settings["shared_steps"]:
         _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"])
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
 
 
 def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
@@ -320,13 +350,24 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
 
 
-def remove_unfinished_compilations(cache_root: Path) -> None:
+def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
     """Delete JIT sources whose compiled module is missing: a case killed while compiling
     leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
-    here: the runner holds the study lock and its job slots' caches are its own."""
-    for source in cache_root.glob("slot-*/fenics/*.c"):
+    here: the runner holds the study lock and its job slots' caches are its own (a SLURM
+    task cleans only the slot it holds)."""
+    for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+
+
+def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
+    """The command that runs `case` in its directory: LAUNCHER FEMCONTACT run scene.toml ..."""
+    command = shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + ["run", "scene.toml", "--out", "."]
+    if case.prefix is not None:
+        command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+    elif case.is_prefix:
+        command += ["--checkpoint"]
+    return command
 
 
 class Runner:
@@ -342,27 +383,27 @@ class Runner:
         remove_unfinished_compilations(self.cache_root)
 
     def command(self, case: Case) -> list[str]:
-        launcher = shlex.split(self.study.settings["launcher"].format(ranks=self.ranks))
-        command = launcher + femcontact_command() + ["run", "scene.toml", "--out", "."]
-        if case.prefix is not None:
-            command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
-        elif case.is_prefix:
-            command += ["--checkpoint"]
-        return command
+        return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
-        case.dir.mkdir(parents=True, exist_ok=True)
-        (case.dir / "result.json").unlink(missing_ok=True)
-        (case.dir / "scene.toml").write_text(to_toml(case.scene))
+        make_dir(case.dir)
         command = self.command(case)
-        write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                               "slot": slot, "started": time.time()})
-        env = {**os.environ, "XDG_CACHE_HOME": str(self.cache_root / f"slot-{slot}"), "PYTHONUNBUFFERED": "1"}
-        env.setdefault("OMP_NUM_THREADS", "1")
-        with open(case.dir / "log.txt", "wb") as log:
-            process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT, env=env,
-                                       stdin=subprocess.DEVNULL, start_new_session=True,
-                                       preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+        try:
+            (case.dir / "result.json").unlink(missing_ok=True)
+            write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
+            write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
+                                                         "slot": slot, "started": time.time()})
+            log = open(case.dir / "log.txt", "wb")
+        except OSError as error:
+            raise WriteError(describe(error, case.dir)) from None
+        with log:
+            try:
+                process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
+                                           env=launch_environment(self.cache_root / f"slot-{slot}"),
+                                           stdin=subprocess.DEVNULL, start_new_session=True,
+                                           preexec_fn=functools.partial(_die_with_parent, os.getpid()))
+            except OSError as error:
+                raise InputError(f"study.launcher: cannot start {command[0]!r} ({error.strerror})") from None
         self.running.append(Job(case, process, slot, time.monotonic()))
 
     def poll(self) -> list[tuple[Case, dict]]:
@@ -420,8 +461,8 @@ class Runner:
                 if prefix is not None and prefix["status"] != "ok":
                     result = {"status": "failed", "reason": f"shared prefix {case.prefix.id} failed: "
                               f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
-                    case.dir.mkdir(parents=True, exist_ok=True)
-                    (case.dir / "scene.toml").write_text(to_toml(case.scene))
+                    make_dir(case.dir)
+                    write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
                     write_json_atomic(case.dir / "runner.json", self.provenance)
                     write_json_atomic(case.dir / "result.json", result)
                     self._finish(case, result)
@@ -449,10 +490,39 @@ def _signal_group(process: subprocess.Popen, sig: int) -> None:
         pass
 
 
+def launch_environment(cache: Path) -> dict:
+    """Environment of a case's launch: its own JIT cache, unbuffered output, one thread per rank,
+    and what Open MPI needs to start at all, as the Makefile sets it: run as root (containers)
+    and more ranks than cores. Values already set are kept."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(cache), "PYTHONUNBUFFERED": "1"}
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env.setdefault(name, "1")
+    env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    if os.geteuid() == 0:
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    return env
+
+
+def _is_rule(line: str) -> bool:
+    """A banner line of dashes, equals signs or stars (Open MPI frames its messages in them)."""
+    return len(line) >= 3 and not line.strip("-=*")
+
+
 def _exit_reason(code: int, log: Path) -> str:
+    """Why a case ended without a result: the exit status and the log's own error, i.e. its last
+    line, or for a message framed in banner lines (an MPI launcher's) the framed text."""
     how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
-    lines = [line for line in log.read_text(errors="replace").splitlines() if line.strip()] if log.exists() else []
-    return f"{how} without a result" + (f"; last log line: {lines[-1].strip()[:300]}" if lines else "")
+    lines = [line.strip() for line in log.read_text(errors="replace").splitlines() if line.strip()] \
+        if log.exists() else []
+    while lines and _is_rule(lines[-1]):
+        lines.pop()
+        framed = []
+        while lines and not _is_rule(lines[-1]):
+            framed.insert(0, lines.pop())
+        if framed:
+            return f"{how} without a result; launcher: {' '.join(framed)[:300]}"
+    return f"{how} without a result" + (f"; last log line: {lines[-1][:300]}" if lines else "")
 
 
 # -- progress -------------------------------------------------------------------------------------
@@ -509,94 +579,3 @@ def _duration(seconds: float) -> str:
     seconds = int(seconds)
     return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m" if seconds >= 3600 else \
         f"{seconds // 60}m{seconds % 60:02d}s" if seconds >= 60 else f"{seconds}s"
-
-
-# -- the command ----------------------------------------------------------------------------------
-
-def add_arguments(parser):
-    parser.add_argument("study", help="study file (TOML)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a value of the base scene for every case")
-    parser.add_argument("--jobs", type=int, default=None, help="cases at once (default: the study's jobs)")
-    parser.add_argument("--ranks-per-case", type=int, default=None, help="MPI ranks per case")
-    parser.add_argument("--retry-failed", action="store_true", help="rerun cases that failed")
-    parser.add_argument("--force", action="store_true", help="rerun every case")
-    parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary")
-    parser.add_argument("--results", default="results", help="results root (default: results)")
-    parser.add_argument("--list", action="store_true", help="list the cases and their state, run nothing")
-
-
-def command(args) -> int:
-    import fcntl
-
-    from femcontact.study.database import Database
-
-    study = load_study(args.study, args.set, args.results)
-    settings = study.settings
-    ranks = args.ranks_per_case or settings["ranks_per_case"]
-    jobs = args.jobs if args.jobs is not None else settings["jobs"]
-    if jobs < 0 or ranks < 1:
-        raise InputError(f"--jobs {jobs} / --ranks-per-case {ranks}: expected jobs >= 0 and ranks >= 1")
-    jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
-    study.results.mkdir(parents=True, exist_ok=True)
-    lock = open(study.results / ".lock", "w")
-    try:
-        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
-
-    database = Database(study.database, study.keys)
-    database.rebuild(study.cases)  # the case directories are the truth
-    if args.list:
-        return _list(study)
-    todo = [case for case in study.cases if _needs_run(case, args)]
-    prefixes = list({case.prefix.id: case.prefix for case in todo if case.prefix is not None
-                     and (args.force or (read_result(case.prefix.dir) or {}).get("status") != "ok")}.values())
-    if not args.quiet:
-        print(f"study {settings['name']}: {len(study.cases)} cases, {len(study.cases) - len(todo)} done, "
-              f"{len(todo)} to run" + (f" (+{len(prefixes)} shared prefixes)" if prefixes else "")
-              + f", {jobs} at a time x {ranks} rank(s)", file=sys.stderr)
-    progress = Progress(len(todo), args.quiet)
-    runner = Runner(study, jobs, ranks, database, progress)
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
-    try:
-        runner.run(todo, prefixes)
-    except KeyboardInterrupt:
-        progress.close()
-        runner.stop_all()
-        database.export_csv(study.results / "results.csv")
-        print(f"study {settings['name']}: interrupted after {progress.done} of {len(todo)} cases; "
-              "run the same command again to continue", file=sys.stderr)
-        return 130
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-    progress.close()
-    database.export_csv(study.results / "results.csv")
-    return _summary(study, progress.start)
-
-
-def _needs_run(case: Case, args) -> bool:
-    result = read_result(case.dir)
-    return args.force or result is None or (args.retry_failed and result["status"] != "ok")
-
-
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt
-
-
-def _list(study: Study) -> int:
-    for case in study.cases:
-        result = read_result(case.dir)
-        print(f"{case.id}  {result['status'] if result else 'todo':6s}  {_describe(case.params)}")
-    return 0
-
-
-def _summary(study: Study, start: float) -> int:
-    results = [(case, read_result(case.dir)) for case in study.cases]
-    failed = [(case, result) for case, result in results if result["status"] != "ok"]
-    print(f"study {study.settings['name']}: {len(results)} cases, {len(results) - len(failed)} ok, "
-          f"{len(failed)} failed ({time.monotonic() - start:.1f} s)")
-    for case, result in failed:
-        print(f"  failed {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
-    print(f"results: {study.database} and {study.results / 'results.csv'}; cases in {study.results / 'cases'}/")
-    return 1 if failed else 0

@@ -140,22 +140,22 @@ def write_jam_map(spec: dict, rows: list[dict], results: Path, column) -> Path:
     return path
 
 
-def table(rows: list[dict], column) -> list[str]:
-    """Markdown lines: the nose shapes' peak insertion force, FE against the reduced model, and
-    the change against the flat taper (the cases whose scene name starts with `nose_`; the taper
-    is `nose_taper`)."""
+def table(rows: list[dict], column) -> list[tuple]:
+    """Report blocks: the nose shapes' peak insertion force, FE against the reduced model, and the
+    change against the flat taper (the cases whose scene name starts with `nose_`; the taper is
+    `nose_taper`)."""
     cases = [r for r in rows if r["status"] == "ok" and str(column(r, "name")).startswith("nose_")]
     if not cases:
         return []
     taper = next((r for r in cases if column(r, "name") == "nose_taper"), None)
-    lines = ["## Nose shapes at equal final contact force", "",
-             "| design | nose | final contact force (N) | peak insertion (N) FE | model | vs taper (FE) | "
-             "peak withdrawal (N) | root stress / yield | max FE stress / yield |", "|---|---|---|---|---|---|---|---|---|"]
+    header = ["design", "nose", "final contact force (N)", "peak insertion (N) FE", "model", "vs taper (FE)",
+              "peak withdrawal (N)", "root stress / yield", "max FE stress / yield"]
+    body = []
     for r in cases:
         saving = (1 - column(r, "peak_insertion_force") / column(taper, "peak_insertion_force")) if taper else math.nan
-        lines.append("| " + " | ".join(_cell(v) for v in (
+        body.append([_cell(v) for v in (
             column(r, "name")[5:], column(r, "peg.nose"), column(r, "final_contact_force"),
             column(r, "peak_insertion_force"), column(r, "model_peak_insertion_force"),
             f"{-100 * saving:+.1f} %" if taper else "", column(r, "peak_withdrawal_force"),
-            column(r, "root_yield_ratio"), column(r, "yield_ratio"))) + " |")
-    return lines + [""]
+            column(r, "root_yield_ratio"), column(r, "yield_ratio"))])
+    return [("h2", "Nose shapes at equal final contact force"), ("table", header, body)]

@@ -1,0 +1,210 @@
+"""`make accuracy`: what accuracy costs in time, measured in one run.
+
+For each knob a user can turn, error against wall time (mesh, forms, solve and
+measurement of one case in this process; Python start-up excluded, forms compiled
+beforehand so the JIT cache is warm):
+
+- Hertz (reference §5, analytic reference): contact-zone size (levels 0-4, a/h_c =
+  2^(L+1) + 0.5), element degree P1/P2, the Nitsche parameter gamma, Newton rtol;
+- 2-D wedging (scenes/wedging_2d.toml, l_d = 5): mesh resolution, against a Richardson
+  extrapolation of the three finest resolutions, for the residual force R_A after release
+  and the released tilt;
+- 3-D wedging (scenes/wedging_3d.toml, 2 ranks, `--with-3d`): resolution, against the finest;
+- the presets `accuracy = fast | balanced | accurate` on both 2-D problems.
+
+Writes results/accuracy/accuracy.md, accuracy.json and one Pareto plot per problem
+(error against wall time, one marker per setting, the Pareto front joined).
+"""
+import argparse
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path("results/accuracy")
+
+
+def hertz_case(label: str, knob: str, contact_size: float, degree: int = 1, gamma: float = 10.0,
+               rtol: float | None = None, resolution: float = 1.0) -> dict:
+    from femcontact.scenarios import hertz
+    from femcontact.solver.stepping import Simulation
+
+    start = time.perf_counter()
+    data = hertz.scene(contact_size, gamma=gamma)
+    data["mesh"]["degree"], data["mesh"]["resolution"] = degree, resolution
+    if rtol is not None:
+        data["solver"]["rtol"] = rtol
+    simulation = Simulation(data)
+    simulation.run()
+    measured = hertz.measure(simulation)
+    wall = time.perf_counter() - start
+    a, p0 = hertz.reference(data)
+    return {"problem": "hertz", "knob": knob, "setting": label, "dofs": simulation.dofs, "wall_time": wall,
+            "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
+            "error_a": abs(measured["a"] / a - 1), "error_p0": abs(measured["p0"] / p0 - 1)}
+
+
+def hertz_rows() -> list[dict]:
+    from femcontact.references.hertz import benchmark_half_width
+
+    a = benchmark_half_width()
+    size = lambda level: a / (2 ** (level + 1) + 0.5)
+    hertz_case("warm-up", "", size(0))
+    hertz_case("warm-up", "", size(0), degree=2)
+    rows = [hertz_case(f"P1 level {level}", "mesh (P1)", size(level)) for level in range(5)]
+    rows += [hertz_case(f"P2 level {level}", "degree P2", size(level), degree=2) for level in range(4)]
+    rows += [hertz_case(f"gamma {gamma:g}, level 2", "Nitsche gamma", size(2), gamma=gamma) for gamma in (1.0, 100.0)]
+    rows += [hertz_case(f"rtol {rtol:g}, level 2", "Newton rtol", size(2), rtol=rtol) for rtol in (1e-6, 1e-11)]
+    rows += [hertz_case(f"preset {name}", "preset", size(1), resolution=resolution)
+             for name, resolution in (("fast", 0.5), ("balanced", 1.0), ("accurate", 2.0))]
+    return rows
+
+
+def wedging_case(resolution: float, label: str, knob: str, overrides=()) -> dict:
+    from femcontact.config.scene import load_scene
+    from femcontact.scenarios.wedging import wedge_metrics
+    from femcontact.solver.stepping import Simulation
+
+    start = time.perf_counter()
+    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", [f"mesh.resolution={resolution}", *overrides])
+    simulation = Simulation(scene)
+    simulation.run()
+    metrics = wedge_metrics(simulation)
+    return {"problem": "wedging_2d", "knob": knob, "setting": label, "resolution": resolution,
+            "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
+            "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
+            "residual_force_A": metrics["residual_force_A"], "tilt_released_deg": metrics["tilt_released_deg"]}
+
+
+def richardson(values: list[float], ratio: float) -> tuple[float, float]:
+    """Extrapolated limit and observed order from three values on meshes refined by `ratio`."""
+    f1, f2, f3 = values
+    order = math.log(abs((f1 - f2) / (f2 - f3))) / math.log(ratio) if f2 != f3 and f1 != f2 else float("nan")
+    if not math.isfinite(order) or order <= 0:
+        return f3, order
+    return f3 + (f3 - f2) / (ratio ** order - 1), order
+
+
+def wedging_rows() -> tuple[list[dict], dict]:
+    wedging_case(0.35, "warm-up", "")
+    resolutions = (0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8)
+    rows = [wedging_case(r, f"resolution {r:g}", "mesh (P1)") for r in resolutions]
+    rows += [wedging_case(r, f"preset {name}", "preset", [f"accuracy={name}"])
+             for name, r in (("fast", 0.5), ("balanced", 1.0), ("accurate", 2.0))]
+    finest = rows[len(resolutions) - 3: len(resolutions)]
+    reference = {}
+    for key in ("residual_force_A", "tilt_released_deg"):
+        reference[key], reference[f"{key}_order"] = richardson([r[key] for r in finest], 2.8 / 2.0)
+    for row in rows:
+        for key in ("residual_force_A", "tilt_released_deg"):
+            row[f"error_{key}"] = abs(row[key] / reference[key] - 1)
+    return rows, reference
+
+
+def wedging_3d_rows() -> list[dict]:
+    rows = []
+    for resolution in (0.3, 0.4, 0.55, 0.75):
+        out = (OUT / f"wedging_3d_{resolution:g}").resolve()
+        start = time.perf_counter()
+        subprocess.run(["mpirun", "-n", "2", sys.executable, "-m", "femcontact", "run",
+                        str(ROOT / "scenes" / "wedging_3d.toml"), "--set", f"mesh.resolution={resolution}",
+                        "--out", str(out), "--quiet"], check=False)
+        path = out / "result.json"
+        result = json.loads(path.read_text()) if path.exists() else {"status": "no result", "info": {}, "metrics": {}}
+        rows.append({"problem": "wedging_3d", "knob": "mesh (P1, 2 ranks)", "setting": f"resolution {resolution:g}",
+                     "wall_time": time.perf_counter() - start, "status": result["status"],
+                     "dofs": result["info"].get("dofs"), "resultant": result["metrics"].get("residual_force_A")})
+    reference = rows[-1]["resultant"]
+    for row in rows:
+        ok = row["resultant"] is not None and reference
+        row["error_resultant"] = abs(row["resultant"] / reference - 1) if ok else float("nan")
+    return rows
+
+
+def pareto_plot(rows: list[dict], error: str, title: str, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    points = [(r["wall_time"], r[error], r["knob"], r["setting"]) for r in rows
+              if r.get(error) and math.isfinite(r[error]) and r[error] > 0]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for knob in dict.fromkeys(p[2] for p in points):
+        xs, ys = zip(*[(p[0], p[1]) for p in points if p[2] == knob])
+        ax.scatter(xs, ys, label=knob, s=30)
+    front, best = [], math.inf
+    for t, e, *_ in sorted(points):
+        if e < best:
+            front.append((t, e))
+            best = e
+    if front:
+        ax.plot(*zip(*front), "k--", lw=1, label="Pareto front")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time of the case (s)")
+    ax.set_ylabel(f"relative error ({error.removeprefix('error_')})")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def markdown(rows: list[dict], reference: dict) -> str:
+    lines = ["# What accuracy costs in time", "",
+             "Measured in one run of `make accuracy` (one process, forms compiled beforehand; wall time = mesh +",
+             "forms + solve + measurement of the case).", ""]
+    sections = [("hertz", ["error_a", "error_p0"]), ("wedging_2d", ["error_residual_force_A",
+                                                                     "error_tilt_released_deg"]),
+                ("wedging_3d", ["error_resultant"])]
+    for problem, errors in sections:
+        selected = [r for r in rows if r["problem"] == problem]
+        if not selected:
+            continue
+        lines += [f"## {problem}", "", "| knob | setting | dofs | Newton its | wall time (s) | "
+                  + " | ".join(errors) + " |", "|---|---|---|---|---|" + "---|" * len(errors)]
+        for r in selected:
+            lines.append(f"| {r['knob']} | {r['setting']} | {r.get('dofs', '')} | {r.get('newton_iterations', '')} | "
+                         f"{r['wall_time']:.2f} | " + " | ".join(f"{100 * r[e]:.3f} %" for e in errors) + " |")
+        lines.append("")
+    if reference:
+        lines += ["Wedging reference (Richardson, resolutions 1.4, 2.0, 2.8): "
+                  + ", ".join(f"{k} = {v:.6g}" for k, v in reference.items()), ""]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m femcontact.scenarios.accuracy", description=__doc__.splitlines()[0])
+    parser.add_argument("--with-3d", action="store_true", help="also the 3-D wedging case on 2 ranks")
+    args = parser.parse_args(argv)
+    OUT.mkdir(parents=True, exist_ok=True)
+    rows = hertz_rows()
+    print(markdown(rows, {}), flush=True)
+    wedging, reference = wedging_rows()
+    rows += wedging
+    if args.with_3d:
+        rows += wedging_3d_rows()
+    (OUT / "accuracy.json").write_text(json.dumps({"rows": rows, "wedging_reference": reference}, indent=1))
+    text = markdown(rows, reference)
+    (OUT / "accuracy.md").write_text(text)
+    pareto_plot([r for r in rows if r["problem"] == "hertz"], "error_a", "Hertz: contact half-width a", OUT / "pareto_hertz_a.png")
+    pareto_plot([r for r in rows if r["problem"] == "hertz"], "error_p0", "Hertz: peak pressure p0", OUT / "pareto_hertz_p0.png")
+    pareto_plot(wedging, "error_residual_force_A", "2-D wedging: residual force R_A after release",
+                OUT / "pareto_wedging_2d.png")
+    if args.with_3d:
+        pareto_plot([r for r in rows if r["problem"] == "wedging_3d"], "error_resultant",
+                    "3-D wedging: contact resultant after release", OUT / "pareto_wedging_3d.png")
+    print(text)
+    print(f"written: {OUT / 'accuracy.md'} and the Pareto plots in {OUT}/")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

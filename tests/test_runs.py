@@ -1,0 +1,66 @@
+"""A single run as a user sees it: progress while it works, history streamed so a killed run
+keeps what it computed, and faults that end the run instead of being retried as cuts."""
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from femcontact.config.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "wedging_2d.toml"
+
+
+def test_killed_run_keeps_the_increments_it_finished(tmp_path):
+    out = tmp_path / "case"
+    command = [sys.executable, "-m", "femcontact", "run", str(SCENE), "--set", "mesh.resolution=0.5",
+               "--set", "steps.0.increments=40", "--out", str(out)]
+    process = subprocess.Popen(command, cwd=ROOT, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    history = out / "history.csv"
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and process.poll() is None:
+        if history.exists() and len(history.read_text().splitlines()) >= 3:  # header + 2 increments
+            break
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    stderr = process.communicate()[1]
+    rows = list(csv.DictReader(open(history)))
+    assert len(rows) >= 2
+    assert all(None not in row.values() and row["step"] == "load" for row in rows)  # whole rows only
+    assert float(rows[1]["time"]) > float(rows[0]["time"]) > 0
+    assert not (out / "result.json").exists()
+    progress = [line for line in stderr.splitlines() if "step 1/2 'load'" in line]
+    assert len(progress) >= 2 and "newton" in progress[0]
+
+
+def test_a_fault_ends_the_run_at_once_with_the_state_restored(monkeypatch):
+    """Only non-convergence is answered by cutting the increment; any other error is a fault."""
+    from femcontact.solver import newton
+    from femcontact.solver.stepping import Simulation
+
+    simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.5"]))
+    calls = []
+
+    def broken(self, load):
+        calls.append(load.time)
+        self.problem.u.x.array[:] = np.nan  # a half-iterated state
+        raise ValueError("a bug")
+
+    monkeypatch.setattr(newton.SchurNewton, "solve", broken)
+    with pytest.raises(ValueError, match="a bug"):
+        simulation.run()
+    assert len(calls) == 1  # not retried as a cut
+    assert np.isfinite(simulation.problem.u.x.array).all()  # restored
+    assert simulation.history == []
+
+
+def test_python_m_femcontact_works_like_the_command():
+    result = subprocess.run([sys.executable, "-m", "femcontact", "--help"], capture_output=True, text=True,
+                            env={**os.environ}, cwd=ROOT)
+    assert result.returncode == 0 and "run" in result.stdout and "study" in result.stdout
