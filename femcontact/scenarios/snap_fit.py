@@ -49,7 +49,8 @@ def forces(scene: dict, rows: list[dict]) -> dict:
         out["depth"].append(-row["rigid_y"] - scene["peg"]["start_gap"])
         out["axial"].append(-width * sum(row[f"contact_{zone}_Fy"] for zone in _zones(scene)))
         out["lateral"].append(width * sum(abs(row[f"contact_{zone}_Fx"]) for zone in _zones(scene)))
-        z = row["contact_B_y"] - place.tip_y - row["rigid_y"]
+        centre = row["contact_B_y"]  # None (NaN in memory) without contact
+        z = (math.nan if centre is None else centre) - place.tip_y - row["rigid_y"]
         out["z"].append(z)
         alpha = float(nose.slope_angle(min(max(z, 0.0), nose.length))) if np.isfinite(z) else 0.0
         force = width * np.array([row["contact_B_Fx"], row["contact_B_Fy"]])  # on spring B
