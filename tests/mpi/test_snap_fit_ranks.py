@@ -1,5 +1,6 @@
 """The snap-fit metrics do not depend on the number of MPI ranks (run under mpirun -n 2): the
-contract scene (two springs) on both ranks against each rank alone on MPI.COMM_SELF."""
+contract scene (two springs) on both ranks against each rank alone on MPI.COMM_SELF, insertion
+only (the withdrawal stays on the shank) to keep the test short."""
 from pathlib import Path
 
 import pytest
@@ -10,13 +11,13 @@ from femcontact.scenarios.snap_fit import snap_fit_metrics
 from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[2] / "scenes" / "snap_fit_2d.toml"
-KEYS = ("insertion_force_ratio", "withdrawal_force_ratio", "final_contact_force", "peak_insertion_force",
-        "peak_withdrawal_force", "root_stress")
+KEYS = ("insertion_force_ratio", "final_contact_force", "peak_insertion_force", "peak_withdrawal_force",
+        "root_stress")
 
 
 def run(comm) -> dict:
     simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.6", "steps.0.increments=20",
-                                               "steps.1.increments=20"]), comm)
+                                               "steps.1.increments=2", "steps.1.motion.y=-0.7"]), comm)
     simulation.run()
     return snap_fit_metrics(simulation)
 
