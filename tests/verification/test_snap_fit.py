@@ -18,7 +18,7 @@ from femcontact.config.scene import load_scene
 from femcontact.errors import InputError
 from femcontact.references import snap_fit as reference
 
-ROOT = Path(__file__).parent.parent
+ROOT = Path(__file__).parents[2]
 SCENE = ROOT / "scenes" / "snap_fit_2d.toml"
 COARSE = ["spring.count=1", "mesh.resolution=0.6"]
 
