@@ -351,13 +351,14 @@ def femcontact_command() -> list[str]:
 
 
 def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Delete JIT sources whose compiled module is missing: a case killed while compiling
-    leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
+    """Delete JIT sources (and their ready marks) whose compiled module is missing: a case killed
+    while compiling leaves them, and FFCx then waits for that compilation until its timeout. Safe
     here: the runner holds the study lock and its job slots' caches are its own (a SLURM
     task cleans only the slot it holds)."""
     for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+            source.with_suffix(".c.cached").unlink(missing_ok=True)  # its 'ready' mark, if any
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
