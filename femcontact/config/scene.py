@@ -16,6 +16,7 @@ from pathlib import Path
 from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+from geometry import snap_fit as snap_fit_geometry
 
 EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support")
 RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
@@ -74,6 +75,34 @@ INDENTER = {
                    choices=("cylinder", "flat")),
     "radius": Field("float", 50.0, "cylinder radius (mm)", positive=True),
     "width": Field("float", 20.0, "flat indenter width (mm)", positive=True),
+}
+
+PIN = {
+    "width": Field("float", 2.0, "pin width 2w: twice the shank radius (mm)", positive=True),
+    "length": Field("float", 6.0, "pin length, nose tip to top (mm)", positive=True),
+    "nose": Field("str", "taper", "nose shape: 'taper' (flat), 'convex' or 'concave' (circular arcs through the "
+                  "taper's end points, tangent to the shank / to the axis), 'points' (`nose_points`)",
+                  choices=("taper", "convex", "concave", "points")),
+    "nose_angle": Field("float", 30.0, "taper half-angle measured from the insertion axis (deg); for the arcs the "
+                        "angle of their chord", min=1.0, max=89.0),
+    "nose_length": Field("float", 1.0, "axial length H of the nose (mm); with `nose_angle` it sets the tip radius "
+                         "w - H tan(angle)", positive=True),
+    "nose_points": Field("any", [], "nose = 'points': [[r, z], ...] (mm) from the tip (z = 0) to the shoulder "
+                         "(r = width / 2), z increasing, r not decreasing", check=snap_fit_geometry.check_points),
+    "start_gap": Field("float", 0.05, "axial gap (mm) between the nose and the spring apex at the start; the "
+                       "insertion depth is the pin's travel less this gap", min=0.0),
+}
+
+SPRING = {
+    "count": Field("int", 1, "contact springs: 1 (on the +x side) or 2 (mirrored)", choices=(1, 2)),
+    "length": Field("float", 5.0, "cantilever length L, root to free end (mm)", positive=True),
+    "thickness": Field("float", 0.3, "cantilever thickness h in the plane of bending (mm)", positive=True),
+    "width": Field("float", 1.0, "out-of-plane width of spring and pin (mm): the plane-stress thickness; the 2-D "
+                   "history is per mm of width, the snap-fit metrics (N) are multiplied by it", positive=True),
+    "pad_height": Field("float", 0.3, "how far the contact pad at the free end reaches in from the spring (mm)",
+                        positive=True),
+    "interference": Field("float", 0.15, "lateral overlap of the pad's apex with the pin's shank (mm): the spring's "
+                          "deflection at full insertion (a negative preload gap)", positive=True),
 }
 
 MESH = {
@@ -175,10 +204,11 @@ def contact_schema(dim: int, geometry: str) -> dict:
                           choices=tuple(PRESETS)),
         "name": Field("str", "scene", "scene name"),
         "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
-        "geometry": Field("str", "peg_in_hole", "'peg_in_hole' or 'block' (a block under a rigid indenter)",
-                          choices=("peg_in_hole", "block")),
-        "rigid": Field("str", "peg" if geometry == "peg_in_hole" else "indenter", "the rigid body",
-                       choices=("peg", "hole") if geometry == "peg_in_hole" else ("indenter",)),
+        "geometry": Field("str", "peg_in_hole", "'peg_in_hole', 'block' (a block under a rigid indenter) or "
+                          "'snap_fit' (a rigid pin between cantilever contact springs)",
+                          choices=("peg_in_hole", "block", "snap_fit")),
+        "rigid": Field("str", "indenter" if geometry == "block" else "peg", "the rigid body",
+                       choices={"peg_in_hole": ("peg", "hole"), "block": ("indenter",), "snap_fit": ("peg",)}[geometry]),
         "effects": Field("strs", ["plane_strain"] if dim == 2 else [], "physics the scene calls for", choices=EFFECTS),
         "mesh": MESH,
         "contact": CONTACT,
@@ -197,6 +227,8 @@ def contact_schema(dim: int, geometry: str) -> dict:
         if dim == 3:
             hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
         schema.update(peg=PEG, hole=hole, support=SUPPORT, materials={"peg": _material(), "hole": _material()})
+    elif geometry == "snap_fit":
+        schema.update(peg=PIN, spring=SPRING, materials={"peg": _material(), "spring": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
         step = {**STEP, "load_point": Field("str", "indenter", "named point where the force acts: 'indenter' "
@@ -237,14 +269,21 @@ def _check_contact(scene: dict) -> None:
                                 f"({', '.join(RIGID_DOFS[dim])})")
         if step["amplitude"] == "pulse" and any(step["support_motion"].values()):
             problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
-    if "compliant_support" in effects and scene.get("rigid") != "peg":
-        problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg, set rigid = 'peg'")
+    if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
+        problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
+                        "set geometry = 'peg_in_hole' and rigid = 'peg'")
     if problems:
         raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
     if scene["geometry"] == "peg_in_hole":
         from geometry.placement import check_peg_in_hole
 
         check_peg_in_hole(scene)
+    if scene["geometry"] == "snap_fit":
+        if dim != 2:
+            raise InputError(f"dim = {dim}: geometry 'snap_fit' is 2-D only")
+        if scene["peg"]["nose"] == "points" and not scene["peg"]["nose_points"]:
+            raise InputError("peg.nose_points: missing (required for peg.nose = 'points')")
+        snap_fit_geometry.layout(scene)  # refuses a spring that cannot meet the nose
     from geometry.model import check_mesh, points
 
     known = sorted([*points(scene), "reference"])

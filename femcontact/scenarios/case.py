@@ -21,6 +21,10 @@ def family_metrics(simulation) -> dict:
         from femcontact.scenarios.wedging import wedge_metrics
 
         return wedge_metrics(simulation)
+    if simulation.scene["geometry"] == "snap_fit":
+        from femcontact.scenarios.snap_fit import snap_fit_metrics
+
+        return snap_fit_metrics(simulation)
     return {}
 
 

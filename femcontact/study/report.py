@@ -139,6 +139,10 @@ def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> 
 
     if spec["kind"] == "wedge_map":
         return write_wedge_map(spec, rows, results)
+    if spec["kind"] in ("force_curves", "sweep", "jam_map"):
+        from femcontact.study import snap_fit_report
+
+        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results, column)
     from femcontact.study.insertion_plots import PLOTS
 
     if spec["kind"] in PLOTS:
@@ -342,6 +346,9 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> li
         blocks.append(("table", [units.label(c) for c in columns],
                        [[_cell(column(row, c), c) for c in columns] for row in rows]))
     blocks += wedge_table(rows)
+    from femcontact.study.snap_fit_report import table as snap_fit_table
+
+    blocks += snap_fit_table(rows, column)
     if plots:
         blocks.append(("h2", "Plots"))
         blocks += [("img", p.name, p.stem) for p in plots]

@@ -61,10 +61,13 @@ SCHEMA = {
         "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
         "y": Field("str", doc="column on the y axis"),
         "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds); "
-                      "insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
-                      choices=("line", "scatter", "wedge_map", "insertion_history", "jamming_diagram",
-                               "wedging_window")),
+        "kind": Field("str", "line", "line, scatter, wedge_map (wedged markers + analytic bounds), force_curves "
+                      "(list metrics against each other, reduced model beside), sweep (a metric, model beside), jam_map "
+                      "(snap fit); insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
+                      choices=("line", "scatter", "wedge_map", "force_curves", "sweep", "jam_map", "insertion_history",
+                               "jamming_diagram", "wedging_window")),
+        "select": Field("any", {}, "force_curves, sweep: only cases whose scene has key = value (or one of a list)",
+                        check=lambda v: None if isinstance(v, dict) else "must be a table"),
         "logx": Field("bool", False, "logarithmic x axis"),
         "logy": Field("bool", False, "logarithmic y axis"),
         "title": Field("str", "", "plot title"),
@@ -350,13 +353,14 @@ def femcontact_command() -> list[str]:
 
 
 def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Delete JIT sources whose compiled module is missing: a case killed while compiling
-    leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
+    """Delete JIT sources (and their ready marks) whose compiled module is missing: a case killed
+    while compiling leaves them, and FFCx then waits for that compilation until its timeout. Safe
     here: the runner holds the study lock and its job slots' caches are its own (a SLURM
     task cleans only the slot it holds)."""
     for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+            source.with_suffix(".c.cached").unlink(missing_ok=True)  # its 'ready' mark, if any
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:

@@ -17,7 +17,7 @@ from femcontact.config.scene import load_scene
 from femcontact.errors import InputError
 from femcontact.solver.stepping import Simulation
 
-SCENE = str(Path(__file__).resolve().parents[1] / "scenes" / "insertion_2d.toml")
+SCENE = str(Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml")
 FREE = ["hole.width=14.0", "peg.offset=0.0", "peg.insertion_depth=2.0", "steps.0.increments=1", "mesh.contact_size=1.0", "mesh.size_max=3.0",
         "mesh.contact_zone=1.0", "solver.rtol=1e-12", "solver.atol=1e-9",
         "steps.0.support_motion.y=0.0"]
@@ -28,7 +28,7 @@ THREE_D = ["dim=3", "effects=['compliant_support']", "hole.kind='single'", "hole
 
 
 def run(*overrides):
-    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, FREE + list(overrides))
+    scene = load_scene(SCENE, FREE + list(overrides))
     simulation = Simulation(scene, comm=MPI.COMM_WORLD)
     simulation.run()
     return simulation, simulation.history[-1]
@@ -116,7 +116,7 @@ def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
     3.90 against 3.88 mm; tolerances 1 %, 1 %, 3 %, one increment (0.1 mm), 3 %, 0.3 mm."""
     from femcontact.scenarios.insertion import insertion_metrics
 
-    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE,
+    scene = load_scene(SCENE,
                        ["mesh.contact_size=0.5", "mesh.size_max=3.0", "steps.0.increments=52",
                         "steps.0.support_motion.y=-5.2"])
     simulation = Simulation(scene, comm=MPI.COMM_WORLD)
@@ -141,7 +141,7 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
     data = THREE_D + ["support.rcc.k=20.0", "support.compliance_centre=10.0", "steps.0.increments=1",
                       "steps.0.force=[3.0, -2.0, 1.0]", "steps.0.moment=[200.0, -300.0, 150.0]",
                       "steps.0.load_point='reference'", "solver.rtol=1e-12", "solver.atol=1e-9"]
-    scene = load_scene(Path(__file__).resolve().parents[1] / SCENE, data)
+    scene = load_scene(SCENE, data)
     simulation = Simulation(scene, comm=MPI.COMM_WORLD)
     simulation.run()
     row = simulation.history[-1]

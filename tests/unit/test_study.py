@@ -1,7 +1,7 @@
 """The study runner: case ids, sweep expansion, resume after SIGKILL, failures, time limit,
 database and CSV, MPI cases, shared prefixes, plots and snapshots.
 
-Cases run through a fake launcher (tests/fake_case.py) that writes result.json like
+Cases run through a fake launcher (tests/support/fake_case.py) that writes result.json like
 `femcontact run` does, so these tests depend neither on the solver nor on the RCC code.
 """
 import csv
@@ -28,7 +28,8 @@ from femcontact.config.schema import set_key
 from femcontact.study.runner import expand, load_study, to_toml
 
 HERE = Path(__file__).parent
-FAKE = f"{sys.executable} {HERE / 'fake_case.py'}"
+SUPPORT = HERE.parent / "support"
+FAKE = f"{sys.executable} {SUPPORT / 'fake_case.py'}"
 PNG = b"\x89PNG\r\n\x1a\n"
 
 BASE = """
@@ -229,7 +230,7 @@ def test_real_rcc_cases_on_two_mpi_ranks(tmp_path, fake, monkeypatch):
                         ("OMPI_MCA_rmaps_base_oversubscribe", "1")):
         monkeypatch.setenv(name, value)
     path = tmp_path / "rcc.toml"
-    path.write_text(f'[study]\nname = "rcc"\nscene = "{HERE.parent / "scenes/rcc.toml"}"\nranks_per_case = 2\n'
+    path.write_text(f'[study]\nname = "rcc"\nscene = "{HERE.parents[1] / "scenes/rcc.toml"}"\nranks_per_case = 2\n'
                     'jobs = 1\n[sweep]\ngrid = { "rcc.theta_l" = [60.0, 70.0] }\n')
     assert run_study(path) == 0
     rows = Database(tmp_path / "results/rcc/results.sqlite", ["rcc.theta_l"]).rows()
@@ -367,7 +368,6 @@ def _dark_blue_share(png) -> float:
 
 @pytest.mark.parametrize("dim, cellwise", [(2, False), (3, True)])
 def test_snapshot_colour_range_clips_a_singular_peak(tmp_path, dim, cellwise):
-    sys.path.insert(0, str(HERE))
     from synthetic_fields import write_fields
 
     from femcontact.outputs.snapshot import render
@@ -398,7 +398,6 @@ def test_snapshot_colour_range_clips_a_singular_peak(tmp_path, dim, cellwise):
 
 
 def test_offscreen_snapshot_prints_no_display_warning(tmp_path):
-    sys.path.insert(0, str(HERE))
     from synthetic_fields import write_fields
 
     write_fields(tmp_path / "fields.npz", 2)

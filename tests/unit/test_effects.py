@@ -93,7 +93,7 @@ def test_compliant_support_is_built_only_when_named():
 
     from femcontact.config.scene import load_scene
 
-    path = Path(__file__).resolve().parents[1] / "scenes" / "insertion_2d.toml"
+    path = Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml"
     coarse = ["mesh.contact_size=1.0", "mesh.size_max=3.0", "mesh.contact_zone=1.0", "steps.0.support_motion.y=0.0"]
     for effects, built in ((["friction", "plane_strain", "compliant_support"], True), (["friction", "plane_strain"], False)):
         scene = load_scene(path, coarse + [f"effects={effects}"])
