@@ -37,6 +37,8 @@ def size_keys(scene: dict) -> list[str]:
     """The scene keys that set the size of the meshed body."""
     if scene["geometry"] == "block":
         return ["block.width", "block.height"] + (["block.depth"] if scene["dim"] == 3 else [])
+    if scene["geometry"] == "snap_fit":
+        return ["spring.length", "spring.thickness", "spring.pad_height"]
     if scene["rigid"] == "hole":
         return ["peg.width", "peg.length"]
     return ["hole.block_width", "hole.depth"] + (["hole.bottom_thickness"] if scene["hole"]["kind"] == "single" else [])
@@ -56,6 +58,10 @@ def _body(scene: dict, sz):
             return volume, lambda d: math.pi * z * z * d + math.pi ** 2 * z * d * d / 2 + 2 * math.pi * d ** 3 / 3, \
                 0.0
         return volume, lambda d: block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0  # a strip |x| <= z
+    if scene["geometry"] == "snap_fit":  # a disc of radius z around each spring's apex, a quarter inside
+        spring = scene["spring"]
+        measure = spring["count"] * (spring["length"] * spring["thickness"] + spring["pad_height"] ** 2 / 2)
+        return measure, lambda d: spring["count"] * math.pi * (z + d) ** 2 / 4, -z
     peg, hole = scene["peg"], scene["hole"]
     D, bw, depth, bt = hole["width"], hole["block_width"], hole["depth"], hole["bottom_thickness"]
     if scene["rigid"] == "peg":

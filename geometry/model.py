@@ -1,7 +1,7 @@
 """A meshed scene: the deformable body's DOLFINx mesh with named tags, plus the rigid body.
 
 `build(scene, comm)` dispatches on scene["geometry"], scene["dim"] and scene["rigid"] to a
-builder (peg_hole_2d, peg_hole_3d, block). Each builder has `sizes(scene)` (computed on
+builder (peg_hole_2d, peg_hole_3d, block, snap_fit). Each builder has `sizes(scene)` (computed on
 every rank) and `generate(scene, sizes)` (gmsh, on rank 0 only, returning the tag names);
 `rigid_body(scene)` and `points(scene)` are pure geometry, computed on every rank.
 """
@@ -30,7 +30,11 @@ class Model:
 
 
 def builder(scene: dict):
-    """The builder module of a scene (block, peg_hole_2d or peg_hole_3d)."""
+    """The builder module of a scene (block, peg_hole_2d, peg_hole_3d or snap_fit)."""
+    if scene["geometry"] == "snap_fit":
+        from geometry import snap_fit
+
+        return snap_fit
     if scene["geometry"] == "block":
         from geometry import block
 
@@ -47,6 +51,10 @@ def builder(scene: dict):
 def rigid_body(scene: dict) -> dict:
     """Analytic description of the rigid body (keys: docs/geometry.md)."""
     dim = scene["dim"]
+    if scene["geometry"] == "snap_fit":
+        from geometry import snap_fit
+
+        return snap_fit.rigid_body(scene)
     identity = {"origin": np.zeros(dim), "rotation": np.eye(dim), "tilt": 0.0}
     if scene["geometry"] == "block":
         ind = scene["indenter"]
@@ -66,7 +74,7 @@ def rigid_body(scene: dict) -> dict:
         return {"shape": "rectangle" if dim == 2 else "cylinder", **size, "length": peg["length"],
                 "corner_radius": peg["corner_radius"], "chamfer_width": peg["chamfer_width"],
                 "chamfer_angle": peg["chamfer_angle"], "origin": pose.origin, "rotation": pose.rotation,
-                "tilt": pose.tilt}
+                "tilt": pose.tilt, "tip_contact": peg.get("tip_contact", True)}
     hole = scene["hole"]
     return {**identity, "shape": "hole", "half_width": hole["width"] / 2, "depth": hole["depth"],
             "block_width": hole["block_width"], "kind": hole["kind"],
@@ -77,7 +85,11 @@ def rigid_body(scene: dict) -> dict:
 def points(scene: dict) -> dict:
     """Named global points (mm): the peg's (placement.Pose.points) for peg_in_hole; for a
     block, `contact` (first contact point, the origin) and `indenter` (the indenter's
-    reference point: cylinder axis or flat-punch tip centre)."""
+    reference point: cylinder axis or flat-punch tip centre); for a snap fit, snap_fit.points."""
+    if scene["geometry"] == "snap_fit":
+        from geometry import snap_fit
+
+        return snap_fit.points(scene)
     if scene["geometry"] == "block":
         rigid = rigid_body(scene)
         return {"contact": np.zeros(scene["dim"]), "indenter": rigid["origin"].copy()}

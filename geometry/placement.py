@@ -16,7 +16,8 @@ at x = D/2 - gap. So l_d is the axial distance from the tip to the contact
 point A. `gap` is measured horizontally: it is the normal gap at wall B and
 gap*cos(tilt) at corner A. In 3-D this is the same construction in the x-z
 plane, which is where a tilted cylinder first touches a round hole.
-Placement 'centred': tip centre on the hole axis at depth l_d, tilt `peg.tilt`.
+Placement 'centred': tip centre at depth l_d, `peg.offset` from
+the hole axis along x, tilt `peg.tilt`.
 
 Only numpy and geometry.two_point here: scene validation imports this module.
 """
@@ -96,7 +97,7 @@ def peg_pose(scene: dict) -> Pose:
     else:
         tilt = math.radians(peg["tilt"])
         R = rotation(tilt, dim)
-        origin = local_point(0.0, -l_d, dim)
+        origin = local_point(peg["offset"], -l_d, dim)
     (xi_b, eta_b), r = _tip_corner(peg)
     e_x = np.eye(dim)[0]
     points = {

@@ -9,7 +9,7 @@ from femcontact.config.scene import contact_schema
 HEADER = """# Scene files
 
 A scene file (TOML) describes one simulation. `kind` selects the schema: `contact` (the finite-element
-contact solver; `geometry` = `peg_in_hole` or `block`) or `rcc` (the RCC truss). Every key is validated
+contact solver; `geometry` = `peg_in_hole`, `block` or `snap_fit`) or `rcc` (the RCC truss). Every key is validated
 on load and with `--set KEY=VALUE`: an unknown key, a wrong type or an out-of-range value is one clear
 error naming the key, the value and what is allowed (exit code 2, no traceback).
 Every number must be finite (`nan` and `inf` are refused for every key). Also refused before
@@ -32,12 +32,16 @@ def scene_page() -> str:
 
     peg = describe(contact_schema(2, "peg_in_hole"))
     block = [line for line in describe(contact_schema(2, "block")) if line not in peg]
+    snap = [line for line in describe(contact_schema(2, "snap_fit")) if line not in peg]
     sections = [
         ("## Contact scene, geometry = peg_in_hole (2-D shown; in 3-D `hole.kind` is `single`)", peg,
          "Example: [`scenes/wedging_2d.toml`](../scenes/wedging_2d.toml) (push, then release), "
          "[`scenes/wedging_moment_2d.toml`](../scenes/wedging_moment_2d.toml) (a couple, then release)."),
         ("## Contact scene, geometry = block (keys that differ)", block,
          "Example: [`scenes/hertz.toml`](../scenes/hertz.toml)."),
+        ("## Contact scene, geometry = snap_fit (keys that differ; 2-D)", snap,
+         "Example: [`scenes/snap_fit_2d.toml`](../scenes/snap_fit_2d.toml) (insert, then withdraw); "
+         "see [snap_fit.md](snap_fit.md)."),
         ("## RCC scene (kind = rcc)", describe(RCC_SCHEMA), "Example: [`scenes/rcc.toml`](../scenes/rcc.toml)."),
     ]
     lines = [HEADER]

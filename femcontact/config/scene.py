@@ -16,8 +16,9 @@ from pathlib import Path
 from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
+from geometry import snap_fit as snap_fit_geometry
 
-EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress")
+EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support")
 RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
 
 
@@ -38,11 +39,16 @@ PEG = {
     "placement": Field("str", "two_point", "'two_point': tilt theta(l_d) touching both walls (less `gap`); "
                        "'centred': axis through the hole centre at `tilt`", choices=("two_point", "centred")),
     "tilt": Field("float", 0.0, "tilt (deg, counter-clockwise) for placement 'centred'", min=-89.0, max=89.0),
+    "offset": Field("float", 0.0, "lateral offset (mm, along x) of the tip centre from the hole axis, "
+                    "placement 'centred' (Whitney's lateral error)"),
     "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
                  min=0.0),
     "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
     "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
     "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
+    "tip_contact": Field("bool", True, "false: the rigid peg's end faces take no contact from inside, a node "
+                         "inside the peg is pushed out through its side (an entering peg: a wall node passed by "
+                         "the tip corner cannot snag under the tip face); keep true if the peg can land on its tip"),
 }
 
 HOLE = {
@@ -69,6 +75,34 @@ INDENTER = {
                    choices=("cylinder", "flat")),
     "radius": Field("float", 50.0, "cylinder radius (mm)", positive=True),
     "width": Field("float", 20.0, "flat indenter width (mm)", positive=True),
+}
+
+PIN = {
+    "width": Field("float", 2.0, "pin width 2w: twice the shank radius (mm)", positive=True),
+    "length": Field("float", 6.0, "pin length, nose tip to top (mm)", positive=True),
+    "nose": Field("str", "taper", "nose shape: 'taper' (flat), 'convex' or 'concave' (circular arcs through the "
+                  "taper's end points, tangent to the shank / to the axis), 'points' (`nose_points`)",
+                  choices=("taper", "convex", "concave", "points")),
+    "nose_angle": Field("float", 30.0, "taper half-angle measured from the insertion axis (deg); for the arcs the "
+                        "angle of their chord", min=1.0, max=89.0),
+    "nose_length": Field("float", 1.0, "axial length H of the nose (mm); with `nose_angle` it sets the tip radius "
+                         "w - H tan(angle)", positive=True),
+    "nose_points": Field("any", [], "nose = 'points': [[r, z], ...] (mm) from the tip (z = 0) to the shoulder "
+                         "(r = width / 2), z increasing, r not decreasing", check=snap_fit_geometry.check_points),
+    "start_gap": Field("float", 0.05, "axial gap (mm) between the nose and the spring apex at the start; the "
+                       "insertion depth is the pin's travel less this gap", min=0.0),
+}
+
+SPRING = {
+    "count": Field("int", 1, "contact springs: 1 (on the +x side) or 2 (mirrored)", choices=(1, 2)),
+    "length": Field("float", 5.0, "cantilever length L, root to free end (mm)", positive=True),
+    "thickness": Field("float", 0.3, "cantilever thickness h in the plane of bending (mm)", positive=True),
+    "width": Field("float", 1.0, "out-of-plane width of spring and pin (mm): the plane-stress thickness; the 2-D "
+                   "history is per mm of width, the snap-fit metrics (N) are multiplied by it", positive=True),
+    "pad_height": Field("float", 0.3, "how far the contact pad at the free end reaches in from the spring (mm)",
+                        positive=True),
+    "interference": Field("float", 0.15, "lateral overlap of the pad's apex with the pin's shank (mm): the spring's "
+                          "deflection at full insertion (a negative preload gap)", positive=True),
 }
 
 MESH = {
@@ -106,6 +140,34 @@ STEP = {
     },
     "motion": {name: Field("float", 0.0, "prescribed rigid-body displacement (mm) or rotation (rad) at the "
                            "end of the step, for dofs set 'prescribed'") for name in RIGID_DOFS[3]},
+    "stop": {
+        "column": Field("str", "", "end the run when this history column (e.g. support_Fy) exceeds `value` in "
+                        "magnitude after an increment of this step; '' = never"),
+        "value": Field("float", 0.0, "threshold of `column` (its units)", min=0.0),
+    },
+    "support_motion": {name: Field("float", 0.0, "with 'compliant_support': the gripper's displacement (mm) or "
+                                   "rotation (rad) at the end of the step, from its start") for name in RIGID_DOFS[3]},
+}
+
+SUPPORT = {
+    "model": Field("str", "springs", "'springs' (kx, kz, ktheta, ktorsion), 'matrix' (`stiffness`) or 'rcc' "
+                   "(the RCC design formula, `rcc`)", choices=("springs", "matrix", "rcc")),
+    "compliance_centre": Field("float", 0.0, "L_g: compliance centre above the peg tip, on its axis (mm)"),
+    "kx": Field("float", 10.0, "lateral stiffness (N/mm; 3-D: x and y)", positive=True),
+    "kz": Field("float", 1e5, "axial stiffness along the hole axis (N/mm)", positive=True),
+    "ktheta": Field("float", 5e4, "angular stiffness about the out-of-plane axis (2-D), about x and y "
+                    "(3-D) (N*mm/rad)", positive=True),
+    "ktorsion": Field("float", 5e4, "torsional stiffness about the hole axis, 3-D (N*mm/rad)", positive=True),
+    "stiffness": Field("floats", [], "model 'matrix': K row by row, 3x3 (x, y, rz) in 2-D, 6x6 (x, y, z, rx, "
+                       "ry, rz) in 3-D (N/mm, N, N*mm/rad), global frame"),
+    "rcc": {
+        "b": Field("float", 50.0, "RCC base length b (mm)", positive=True),
+        "peg_length": Field("float", 50.0, "RCC design peg length L (mm): places its centre at the design tip",
+                            min=0.0),
+        "theta_l": Field("float", 70.0, "RCC link tilt theta_L (deg)",
+                         check=lambda v: None if 0.0 < v < 90.0 else "must lie in (0, 90)"),
+        "k": Field("float", 200.0, "RCC link stiffness (N/mm)", positive=True),
+    },
 }
 
 SOLVER = {
@@ -142,10 +204,11 @@ def contact_schema(dim: int, geometry: str) -> dict:
                           choices=tuple(PRESETS)),
         "name": Field("str", "scene", "scene name"),
         "dim": Field("int", 2, "spatial dimension", choices=(2, 3)),
-        "geometry": Field("str", "peg_in_hole", "'peg_in_hole' or 'block' (a block under a rigid indenter)",
-                          choices=("peg_in_hole", "block")),
-        "rigid": Field("str", "peg" if geometry == "peg_in_hole" else "indenter", "the rigid body",
-                       choices=("peg", "hole") if geometry == "peg_in_hole" else ("indenter",)),
+        "geometry": Field("str", "peg_in_hole", "'peg_in_hole', 'block' (a block under a rigid indenter) or "
+                          "'snap_fit' (a rigid pin between cantilever contact springs)",
+                          choices=("peg_in_hole", "block", "snap_fit")),
+        "rigid": Field("str", "indenter" if geometry == "block" else "peg", "the rigid body",
+                       choices={"peg_in_hole": ("peg", "hole"), "block": ("indenter",), "snap_fit": ("peg",)}[geometry]),
         "effects": Field("strs", ["plane_strain"] if dim == 2 else [], "physics the scene calls for", choices=EFFECTS),
         "mesh": MESH,
         "contact": CONTACT,
@@ -163,7 +226,9 @@ def contact_schema(dim: int, geometry: str) -> dict:
         hole = dict(HOLE)
         if dim == 3:
             hole["kind"] = Field("str", "single", HOLE["kind"].doc, choices=("single",))
-        schema.update(peg=PEG, hole=hole, materials={"peg": _material(), "hole": _material()})
+        schema.update(peg=PEG, hole=hole, support=SUPPORT, materials={"peg": _material(), "hole": _material()})
+    elif geometry == "snap_fit":
+        schema.update(peg=PIN, spring=SPRING, materials={"peg": _material(), "spring": _material()})
     else:
         schema.update(block=BLOCK, indenter=INDENTER, materials={"block": _material(), "indenter": _material()})
         step = {**STEP, "load_point": Field("str", "indenter", "named point where the force acts: 'indenter' "
@@ -196,12 +261,29 @@ def _check_contact(scene: dict) -> None:
         for name, value in step["motion"].items():
             if value and scene["rigid_body"]["dofs"].get(name) != "prescribed":
                 problems.append(f"steps[{i}].motion.{name} = {value}: rigid_body.dofs.{name} is not 'prescribed'")
+        for name, value in step["support_motion"].items():
+            if value and "compliant_support" not in effects:
+                problems.append(f"steps[{i}].support_motion.{name} = {value}: needs the 'compliant_support' effect")
+            elif value and name not in RIGID_DOFS[dim]:
+                problems.append(f"steps[{i}].support_motion.{name} = {value}: not a {dim}-D dof "
+                                f"({', '.join(RIGID_DOFS[dim])})")
+        if step["amplitude"] == "pulse" and any(step["support_motion"].values()):
+            problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
+    if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
+        problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
+                        "set geometry = 'peg_in_hole' and rigid = 'peg'")
     if problems:
         raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
     if scene["geometry"] == "peg_in_hole":
         from geometry.placement import check_peg_in_hole
 
         check_peg_in_hole(scene)
+    if scene["geometry"] == "snap_fit":
+        if dim != 2:
+            raise InputError(f"dim = {dim}: geometry 'snap_fit' is 2-D only")
+        if scene["peg"]["nose"] == "points" and not scene["peg"]["nose_points"]:
+            raise InputError("peg.nose_points: missing (required for peg.nose = 'points')")
+        snap_fit_geometry.layout(scene)  # refuses a spring that cannot meet the nose
     from geometry.model import check_mesh, points
 
     known = sorted([*points(scene), "reference"])

@@ -8,6 +8,7 @@
 Adding an effect: one module with an `Effect` subclass, one line in `NAMED`, and its
 name in `femcontact.config.scene.EFFECTS` (docs/architecture.md).
 """
+from femcontact.effects.compliant_support import CompliantSupport
 from femcontact.effects.contact import NormalContact
 from femcontact.effects.elasticity import Elasticity
 from femcontact.effects.friction import Friction
@@ -16,7 +17,7 @@ from femcontact.effects.inertia import Inertia
 from femcontact.effects.rigid_corners import RigidCorners
 
 ALWAYS = (Elasticity, NormalContact)
-NAMED = {"friction": Friction, "inertia": Inertia, "gravity": Gravity}
+NAMED = {"friction": Friction, "inertia": Inertia, "gravity": Gravity, "compliant_support": CompliantSupport}
 """Effects built when the scene names them, in the order they add their terms."""
 BY_SHAPE = (RigidCorners,)
 

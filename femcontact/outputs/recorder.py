@@ -3,7 +3,7 @@
 Reactions come from the assembled residual at the support dofs (variationally
 consistent, so they balance the rigid body's load to solver tolerance); contact
 resultants from the contact residual, per zone (A: x < 0, B: x > 0 for a peg in a
-hole, one zone `top` for a block); nodal contact pressure and stick/slip states
+hole or the springs of a snap fit, one zone `top` for a block); nodal contact pressure and stick/slip states
 from boundary integrals lumped to the P1 nodes of the contact surface.
 """
 import numpy as np
@@ -43,7 +43,7 @@ class Recorder:
             facets = p.model.facet_tags.find(p.model.facets[name])
             dofs = fem.locate_dofs_topological(p.V, p.dim - 1, facets)
             on_contact[dofs[dofs < n_owned]] = True
-        if p.scene["geometry"] == "peg_in_hole":
+        if p.scene["geometry"] in ("peg_in_hole", "snap_fit"):
             self.zones = {"A": on_contact & (x[:, 0] < 0), "B": on_contact & (x[:, 0] >= 0)}
         else:
             self.zones = {"top": on_contact}

@@ -1,4 +1,4 @@
-"""Off-screen PNG of von Mises stress on the deformed shape (pyvista), 2-D and 3-D.
+"""Off-screen PNG of von Mises stress on the deformed shape (pyvista + matplotlib), 2-D and 3-D.
 
 Input: a case's `fields.npz`, written by the solver (rank 0, gathered P1 data):
   points        (N, 3) reference coordinates of the mesh nodes (z = 0 in 2-D)
@@ -8,13 +8,23 @@ Input: a case's `fields.npz`, written by the solver (rank 0, gathered P1 data):
   von_mises     (N,) nodal or (M,) cellwise von Mises stress (nodal when N == M)
   rigid_outline (P, 3) optional polyline of the rigid body in its final pose
   named_point_names (K,), named_point_coords (K, 3)  optional points a zoom may name
-The colour bar spans exactly the field's min..max.
+
+Each view has its own colour bar, beside it (outside the geometry), from the field's minimum
+to its `percentile` (99th by default) weighted by area (volume in 3-D): the value exceeded
+on 1 % of the body, or of the zoomed region (cells whose centroid lies within the zoom
+radius of its centre, in every coordinate). Sharp rigid corners make a stress singularity
+whose peak would otherwise paint everything else in the lowest colour. Values above the
+range take the top colour (the bar's arrow); the title states the true maximum and where it
+is (reference coordinates, and the nearest named point). pyvista draws each view without
+annotations (2-D without lighting, so the colours are the bar's); matplotlib lays them out.
 """
 import os
 
 import numpy as np
 
 CELL_TYPES = {"triangle": 5, "tetra": 10}  # VTK_TRIANGLE, VTK_TETRA
+PERCENTILE = 99.0
+CMAP = "jet"
 
 
 def load(path) -> dict:
@@ -43,9 +53,83 @@ def zoom_box(fields: dict, zoom, radius: float = 0.0):
     return np.array(list(centre) + [0.0] * (3 - len(centre))), float(r)
 
 
-def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, size=(1600, 700)) -> dict:
-    """Write the PNG (whole body; beside it the zoom, when given); returns {'range': (min, max)}."""
+def peak(fields: dict) -> dict:
+    """The largest von Mises value (MPa), where it is (reference coordinates of the node or cell
+    centroid, mm) and the nearest named point with its distance (mm), if the file names points."""
+    von_mises, points = fields["von_mises"], fields["points"]
+    index = int(np.argmax(von_mises))
+    where = points[index] if len(von_mises) == len(points) else points[fields["cells"][index]].mean(axis=0)
+    out = {"value": float(von_mises[index]), "at": where, "near": None, "distance": None}
+    names = [str(name) for name in fields.get("named_point_names", [])]
+    if names:
+        distances = np.linalg.norm(fields["named_point_coords"] - where, axis=1)
+        out["near"], out["distance"] = names[int(np.argmin(distances))], float(distances.min())
+    return out
+
+
+def measures(fields: dict) -> np.ndarray:
+    """Area (triangles, mm^2) or volume (tetrahedra, mm^3) of each von Mises value's share of the body:
+    the cell's own for cellwise values, a third (a quarter) of each adjacent cell's for nodal values."""
+    points, cells = fields["points"], fields["cells"]
+    edges = points[cells[:, 1:]] - points[cells[:, :1]]
+    if cells.shape[1] == 3:
+        size = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+    else:
+        size = np.abs(np.linalg.det(edges)) / 6
+    if len(fields["von_mises"]) == len(cells) and len(cells) != len(points):
+        return size
+    nodal = np.zeros(len(points))
+    np.add.at(nodal, cells.ravel(), np.repeat(size / cells.shape[1], cells.shape[1]))
+    return nodal
+
+
+def weighted_percentile(values: np.ndarray, weights: np.ndarray, percentile: float) -> float:
+    """The smallest value v such that the values <= v carry at least `percentile` % of the weight."""
+    order = np.argsort(values)
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, percentile / 100 * cumulative[-1])])
+
+
+def colour_range(fields: dict, percentile: float, region=None) -> tuple[float, float]:
+    """(min, weighted percentile) of von Mises over the body, or over a zoom region (centre, radius)."""
+    values, weights = fields["von_mises"], measures(fields)
+    if region is not None:
+        centre, radius = region
+        where = fields["points"] if len(values) == len(fields["points"]) else \
+            fields["points"][fields["cells"]].mean(axis=1)
+        inside = np.abs(where - centre).max(axis=1) <= radius
+        if inside.any():
+            values, weights = values[inside], weights[inside]
+    low, high = float(values.min()), weighted_percentile(values, weights, percentile)
+    return (low, high) if high > low else (low, max(float(values.max()), low + 1e-12))
+
+
+def _trim(image: np.ndarray, margin: int = 8) -> np.ndarray:
+    """The screenshot without its uniform background border (all but `margin` pixels of it)."""
+    rows, columns = np.nonzero((image != image[0, 0]).any(axis=2))
+    if not len(rows):
+        return image
+    return image[max(rows.min() - margin, 0): rows.max() + margin + 1,
+                 max(columns.min() - margin, 0): columns.max() + margin + 1]
+
+
+def _quiet_offscreen() -> None:
+    """Off-screen rendering without a display: pick VTK's OSMesa window (libosmesa6) instead of
+    letting VTK try X first and warn "bad X server connection. DISPLAY=" on every render."""
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    if not os.environ.get("DISPLAY"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkOSOpenGLRenderWindow")
+
+
+def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, size=(1600, 700),
+           percentile=PERCENTILE) -> dict:
+    """Write the PNG (whole body; beside it the zoom, when given). Returns {'ranges': [(min, max) of
+    each view's colour map as rendered], 'peak': peak(fields)}."""
+    _quiet_offscreen()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     import pyvista
 
     fields = load(fields_npz_path)
@@ -55,26 +139,44 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
                                     points + scale * fields["displacement"])
     von_mises = fields["von_mises"]
     (grid.point_data if len(von_mises) == len(points) else grid.cell_data)["von Mises"] = von_mises
-    clim = (float(von_mises.min()), float(von_mises.max()))
     plane = bool(np.allclose(points[:, 2], 0))
     views = [None] if zoom is None else [None, zoom_box(fields, zoom, zoom_radius)]
-    plotter = pyvista.Plotter(off_screen=True, shape=(1, len(views)), window_size=size)
-    ranges = []
-    for column, view in enumerate(views):
-        plotter.subplot(0, column)
-        actor = plotter.add_mesh(grid, scalars="von Mises", clim=clim, cmap="jet", show_edges=view is not None,
-                                 scalar_bar_args={"title": "MPa", "vertical": True, "fmt": "%.4g",
-                                                  "position_x": 0.85, "position_y": 0.1, "width": 0.08})
-        ranges.append(tuple(actor.mapper.lookup_table.scalar_range))
+    images, ranges = [], []
+    for view in views:
+        plotter = pyvista.Plotter(off_screen=True, window_size=(size[0] // len(views), size[1]))
+        actor = plotter.add_mesh(grid, scalars="von Mises", clim=colour_range(fields, percentile, view), cmap=CMAP,
+                                 show_edges=view is not None, show_scalar_bar=False, lighting=not plane)
         if "rigid_outline" in fields and len(fields["rigid_outline"]) > 1:  # 3-D cylinders have none
             plotter.add_mesh(pyvista.lines_from_points(fields["rigid_outline"]), color="black", line_width=3)
         _place_camera(plotter, grid, plane, view)
-        plotter.add_text("von Mises stress, " + ("contact zone" if view is not None else "deformed shape"),
-                         font_size=10)
-    plotter.screenshot(str(png_path))
-    plotter.close()
-    assert all(r == ranges[0] for r in ranges)
-    return {"range": ranges[0]}
+        image = plotter.screenshot(return_img=True)
+        images.append(_trim(image) if view is None else image)  # the zoom is framed by its camera
+        ranges.append(tuple(float(v) for v in actor.mapper.lookup_table.scalar_range))
+        plotter.close()
+
+    top = peak(fields)
+    dpi = 100
+    aspects = [image.shape[1] / image.shape[0] for image in images]
+    bars, titles = 1.1 * len(views), 1.1  # inches
+    panel = min(size[1] / dpi - titles, (size[0] / dpi - bars) / sum(aspects))  # height of the views
+    figure = plt.figure(figsize=(panel * sum(aspects) + bars, panel + titles), dpi=dpi, layout="constrained")
+    axes = figure.subplots(1, len(views), squeeze=False, gridspec_kw={"width_ratios": aspects})[0]
+    for ax, image, view, limits in zip(axes, images, views, ranges):
+        ax.imshow(image)
+        ax.set_axis_off()
+        ax.set_title("whole body" if view is None else
+                     f"{zoom if isinstance(zoom, str) else 'zoom'}, {2 * view[1]:.3g} mm wide", fontsize=11)
+        mappable = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(*limits), CMAP)
+        bar = figure.colorbar(mappable, ax=ax, extend="max", shrink=0.9, aspect=30, pad=0.02)
+        bar.set_label("von Mises (MPa)", fontsize=10)
+    where = ", ".join(f"{c:.4g}" for c in top["at"][: 2 if plane else 3])
+    near = f", {top['distance']:.2g} mm from {top['near']}" if top["near"] else ""
+    figure.suptitle(f"von Mises stress, displacements x {scale:g}: max {top['value']:.4g} MPa at ({where}) mm{near}\n"
+                    f"each colour bar: minimum to the {percentile:g}th percentile (by area) of its view; "
+                    "above: top colour", fontsize=11)
+    figure.savefig(png_path, dpi=dpi)
+    plt.close(figure)
+    return {"ranges": ranges, "peak": top}
 
 
 def _place_camera(plotter, grid, plane: bool, view) -> None:

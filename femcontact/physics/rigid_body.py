@@ -26,6 +26,14 @@ def mass_properties(rigid: dict, density: float, dim: int):
     if shape == "disc":
         m = density * np.pi * rigid["radius"] ** 2
         return m, np.array([m * rigid["radius"] ** 2 / 2])
+    if shape == "pin":  # polygon of its outline (arcs sampled), reference point at the tip centre
+        from femcontact.physics.signed_distance import outline
+
+        x, y = outline(rigid)[:, :2].T
+        cross = x[:-1] * y[1:] - x[1:] * y[:-1]
+        area = cross.sum() / 2
+        polar = (cross * (x[:-1] ** 2 + x[:-1] * x[1:] + x[1:] ** 2 + y[:-1] ** 2 + y[:-1] * y[1:] + y[1:] ** 2)).sum() / 12
+        return density * area, np.array([density * polar])
     if shape == "cylinder":
         R, L = rigid["radius"], rigid["length"]
         m = density * np.pi * R * R * L

@@ -4,7 +4,8 @@ Every shape is written in its own frame, centred on its reference point (the cen
 for a peg, the centre for a disc), so the rigid body's pose only maps points into that
 frame. Shapes come from `geometry.model.Model.rigid`:
 rectangle (2-D peg, flat punch), cylinder (3-D peg), disc (2-D cylinder indenter),
-cylinder_y (3-D cylinder indenter, axis y) and hole (a rigid hole, the peg deformable).
+cylinder_y (3-D cylinder indenter, axis y), hole (a rigid hole, the peg deformable) and
+pin (2-D snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred).
 """
 import numpy as np
 import ufl
@@ -12,17 +13,19 @@ import ufl
 from femcontact.errors import InputError
 
 
-def _box(q, radius, tiny):
+def _box(q, radius, tiny, sides_only=False):
     """Signed distance to a box given q = |xi| - half_sizes (rounded by `radius`).
 
     Written with an explicit inside/outside branch so that a point exactly on a face
     (q_i = 0) gets that face's normal as gradient; the outside part is regularised by
-    `tiny` (mm) so its derivative stays finite on the edges of the branch."""
+    `tiny` (mm) so its derivative stays finite on the edges of the branch. `sides_only`:
+    a point inside is pushed out through the side (q[0]) whatever the nearer face, so
+    the end faces take no contact from inside (a peg's tip face, see `tip_contact`)."""
     outside = ufl.sqrt(sum(ufl.max_value(qi, 0) ** 2 for qi in q) + tiny ** 2) - tiny
     inside = q[0]
     is_outside = ufl.gt(q[0], 0)
     for qi in q[1:]:
-        inside = ufl.max_value(inside, qi)
+        inside = inside if sides_only else ufl.max_value(inside, qi)
         is_outside = ufl.Or(is_outside, ufl.gt(qi, 0))
     return ufl.conditional(is_outside, outside, inside) - radius
 
@@ -45,17 +48,20 @@ def signed_distance(rigid: dict, xi):
     if shape == "rectangle":
         r = rigid["corner_radius"]
         q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]
-        return _box(q, r, tiny)
+        return _box(q, r, tiny, not rigid.get("tip_contact", True))
     if shape == "cylinder":
         r = rigid["corner_radius"]
         rho = ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
-        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny)
+        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny,
+                    not rigid.get("tip_contact", True))
     if shape == "disc":
         return ufl.sqrt(ufl.dot(xi, xi)) - rigid["radius"]
     if shape == "cylinder_y":
         return ufl.sqrt(xi[0] ** 2 + xi[2] ** 2) - rigid["radius"]
     if shape == "hole" and len(xi) == 2:
         return _hole_2d(rigid, xi, tiny)
+    if shape == "pin" and len(xi) == 2:
+        return _pin_2d(rigid["pieces"], rigid["length"], xi, tiny)
     raise InputError(f"rigid shape {shape!r} in {len(xi)}-D is not available")
 
 
@@ -73,6 +79,46 @@ def _hole_2d(rigid, xi, tiny):
     return distance
 
 
+def _cross(a, b):
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def _pin_2d(pieces, pin_length, xi, tiny):
+    """Exact signed distance of a pin symmetric about its axis, given the right half of its
+    outline in (r, z) = (|x|, y) as straight segments and circular arcs (geometry.snap_fit):
+    the distance is the smallest to any piece, negative inside |x| < r(y), 0 < y < length."""
+    p = [abs(xi[0]), xi[1]]
+    distances, radius = [], None
+
+    def length(v):
+        return ufl.sqrt(v[0] ** 2 + v[1] ** 2 + tiny ** 2) - tiny
+
+    for piece in pieces:
+        a, b = np.asarray(piece[-2], float), np.asarray(piece[-1], float)
+        if piece[0] == "segment":
+            ab = b - a
+            t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / (ab @ ab), 1.0), 0.0)
+            distances.append(length([p[0] - a[0] - t * ab[0], p[1] - a[1] - t * ab[1]]))
+            r_of_z = a[0] + (xi[1] - a[1]) * ab[0] / ab[1] if ab[1] > 0 else None
+        else:
+            centre, R = np.asarray(piece[1], float), piece[2]
+            q = [p[0] - centre[0], p[1] - centre[1]]
+            first, last = (a - centre, b - centre) if _cross(a - centre, b - centre) > 0 else (b - centre, a - centre)
+            in_wedge = ufl.And(ufl.ge(_cross(first, q), 0), ufl.ge(_cross(q, last), 0))
+            to_arc = ufl.sqrt((ufl.sqrt(q[0] ** 2 + q[1] ** 2) - R) ** 2 + tiny ** 2) - tiny
+            to_ends = ufl.min_value(length([p[0] - a[0], p[1] - a[1]]), length([p[0] - b[0], p[1] - b[1]]))
+            distances.append(ufl.conditional(in_wedge, to_arc, to_ends))
+            side = 1.0 if centre[0] < b[0] else -1.0  # convex: the centre is inside the pin
+            r_of_z = centre[0] + side * ufl.sqrt(ufl.max_value(R * R - (xi[1] - centre[1]) ** 2, 0.0))
+        if r_of_z is not None and b[1] > a[1]:
+            radius = r_of_z if radius is None else ufl.conditional(ufl.le(xi[1], a[1]), radius, r_of_z)
+    distance = distances[0]
+    for d in distances[1:]:
+        distance = ufl.min_value(distance, d)
+    inside = ufl.And(ufl.And(ufl.gt(xi[1], 0), ufl.lt(xi[1], pin_length)), ufl.lt(p[0], radius))
+    return ufl.conditional(inside, -distance, distance)
+
+
 def outline(rigid: dict, points: int = 64) -> np.ndarray:
     """Closed polyline (P x 3, local frame about the reference point) of a 2-D shape, for pictures."""
     shape = rigid["shape"]
@@ -82,6 +128,10 @@ def outline(rigid: dict, points: int = 64) -> np.ndarray:
     elif shape == "disc":
         t = np.linspace(0, 2 * np.pi, points)
         xy = rigid["radius"] * np.c_[np.cos(t), np.sin(t)]
+    elif shape == "pin":
+        from geometry.snap_fit import outline as pin_outline
+
+        xy = pin_outline(rigid["pieces"])
     else:
         return np.zeros((0, 3))
     return np.c_[xy, np.zeros(len(xy))]

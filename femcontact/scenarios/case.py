@@ -11,11 +11,20 @@ from femcontact.errors import InputError
 
 
 def family_metrics(simulation) -> dict:
-    """The study family's metrics of a finished contact simulation (none for a plain block)."""
+    """The study family's metrics of a finished contact simulation (none for a plain block):
+    a peg on a compliant support is an insertion, any other peg in a hole a wedging case."""
+    if "compliant_support" in simulation.scene["effects"]:
+        from femcontact.scenarios.insertion import insertion_metrics
+
+        return insertion_metrics(simulation)
     if simulation.scene["geometry"] == "peg_in_hole":
         from femcontact.scenarios.wedging import wedge_metrics
 
         return wedge_metrics(simulation)
+    if simulation.scene["geometry"] == "snap_fit":
+        from femcontact.scenarios.snap_fit import snap_fit_metrics
+
+        return snap_fit_metrics(simulation)
     return {}
 
 
@@ -66,7 +75,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     metrics = {**summary_metrics(simulation), **family_metrics(simulation)}
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
             "effects": list(scene["effects"]), "built": simulation.problem.built,
-            "stabilized_increments": simulation.stabilized_increments}
+            "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped}
     return {"metrics": metrics, "timings": simulation.timings, "info": info}
 
 

@@ -370,7 +370,7 @@ def report(study) -> list[Path]:
             writer.writeheader()
             writer.writerows(rows)
     # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
-    thesis_path = Path(__file__).resolve().parent.parent / "tests" / "data" / "dislodging_thesis.csv"
+    thesis_path = Path(__file__).resolve().parents[2] / "tests" / "data" / "dislodging_thesis.csv"
     thesis = _read_csv(thesis_path) if thesis_path.exists() else []
     paths = []
     for case in sorted({int(r["case"]) for r in pulls}):

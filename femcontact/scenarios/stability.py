@@ -1,8 +1,11 @@
 """`make stability`: hard cases stay numerically stable, shown on a seeded random sweep.
 
 Draws valid peg-in-hole scenes over the ranges users reach (friction mu 0-0.8, clearance
-ratio 1e-5-1e-2 log-uniform, Poisson ratio 0.2-0.499, push 0.1-1000 N log-uniform or a
-couple, depth anywhere between l_crit and the peg length, meshes from coarse to fine,
+ratio 1e-5-1e-2 log-uniform, Poisson ratio 0.2-0.499, a push of 0.1-1000 N log-uniform on
+the peg top towards the leaning side (within 30 deg of horizontal) or a counter-clockwise
+couple, the loads that wedge a peg, as in the thesis; a load that pulls the peg out of
+two-point contact has no quasi-static equilibrium), depth anywhere between l_crit and the
+peg length, meshes from coarse to fine,
 2-D and a few coarse 3-D cases), writes them as one study (results/stability/study.toml,
 explicit cases, so a rerun resumes) and runs it with the study runner: every case in its
 own process under a time limit. Then each result is checked: either `ok` with every
@@ -45,12 +48,12 @@ def draw(rng, dim: int) -> dict:
     magnitude = 10 ** rng.uniform(-1, 3)  # N: four decades
     if dim == 2:
         case["mesh.resolution"] = _round(10 ** rng.uniform(math.log10(0.35), math.log10(1.5)))
-        if rng.uniform() < 0.75:
-            angle = rng.uniform(0, 2 * math.pi)
+        if rng.uniform() < 0.75:  # a push towards -x on the peg top, within 30 deg of horizontal
+            angle = math.pi + rng.uniform(-math.pi / 6, math.pi / 6)
             case["steps.0.force"] = [_round(magnitude * math.cos(angle)), _round(magnitude * math.sin(angle))]
-        else:
+        else:  # a counter-clockwise couple, as in the thesis
             case["steps.0.force"] = []
-            case["steps.0.moment"] = [_round(magnitude * depth * rng.choice([-1.0, 1.0]))]
+            case["steps.0.moment"] = [_round(magnitude * depth)]
     else:
         case["mesh.resolution"] = 0.4
         case["steps.0.moment"] = [0.0, _round(-magnitude * depth), 0.0]

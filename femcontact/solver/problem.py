@@ -22,7 +22,7 @@ from femcontact.physics.rotation import rotation_numpy
 
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 DEFORMABLE = {"peg": "hole", "hole": "peg", "indenter": "block"}
-"""The deformable body for each choice of rigid body."""
+"""The deformable body for each choice of rigid body (a snap fit's pin mates with `spring`)."""
 
 
 class Problem:
@@ -35,7 +35,7 @@ class Problem:
         if not model.supports:
             raise InputError(f"rigid = {scene['rigid']!r}: the deformable body has no support; "
                              "hold it (e.g. make the peg the rigid body)")
-        self.deformable = DEFORMABLE[scene["rigid"]]
+        self.deformable = "spring" if scene["geometry"] == "snap_fit" else DEFORMABLE[scene["rigid"]]
         degree = scene["mesh"]["degree"]
         self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", degree))
         self.u = fem.Function(self.V, name="displacement")

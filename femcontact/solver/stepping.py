@@ -64,6 +64,7 @@ class Simulation:
         self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
                               for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
         self.stabilized_increments = 0
+        self.stopped = ""  # why the run ended before its last step, if a stop condition did it
         self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
@@ -75,7 +76,8 @@ class Simulation:
 
     def run(self, first_step: int = 0) -> list[dict]:
         for index, step in enumerate(self.scene["steps"][first_step:], start=first_step):
-            self.run_step(index, step)
+            if not self.run_step(index, step):
+                break
         return self.history
 
     # -- checkpoints: a study's shared prefix is computed once --------------------------------
@@ -107,8 +109,9 @@ class Simulation:
         for listener in self.listeners:
             listener(row, cuts)
 
-    def run_step(self, index: int, step: dict) -> None:
-        """Advance through one step with adaptive increments."""
+    def run_step(self, index: int, step: dict) -> bool:
+        """Advance through one step with adaptive increments; False when the step's stop
+        condition (|row[stop.column]| > stop.value) ended the run early (`self.stopped`)."""
         from femcontact.solver.newton import NewtonFailure
 
         nominal = step["duration"] / step["increments"]
@@ -127,9 +130,14 @@ class Simulation:
                 dt /= 2
                 continue
             self._record(row, cuts)
+            stop = step["stop"]
+            if stop["column"] and abs(row.get(stop["column"], 0.0)) > stop["value"]:
+                self.stopped = f"step {step['name']!r}: |{stop['column']}| > {stop['value']:g} at t = {load.time:.6g} s"
+                return False
             t += dt
             if cuts and row["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
+        return True
 
     def increment(self, load) -> dict:
         """Solve one increment from the last converged state (restored on any failure);

@@ -1,20 +1,27 @@
-"""`femcontact report STUDY.toml`: plots, stress snapshots and a Markdown summary of a study.
+"""`femcontact report STUDY.toml`: plots, stress snapshots and a summary of a study.
 
 Everything goes to results/NAME/: the plots the study declares ([[plot]], PNG),
-snapshots/CASE_ID.png for the cases [snapshots] selects, and summary.md (a table
-of the cases). The database is rebuilt from the case directories first, so the
-report shows exactly what is on disk.
+snapshots/CASE_ID.png for the cases [snapshots] selects, and the summary twice, as
+summary.md and index.html (the same table and pictures, for a browser). The table shows
+the headline columns ([report] columns, or by default case id, swept keys, status, the
+family's primary metrics and wall time; labels with units from femcontact.study.units); every
+column is in results.csv and results.sqlite. The database is rebuilt from the case
+directories first, so the report shows exactly what is on disk.
 """
+import html
 import json
 import math
 import os
 import re
 import sys
+import textwrap
+from collections import Counter
 from pathlib import Path
 
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
-from femcontact.study.runner import flatten, get_key, load_study
+from femcontact.study import units
+from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study
 
 
 def add_arguments(parser):
@@ -39,20 +46,41 @@ def command(args) -> int:
         database.close()
     for row in rows:
         row["scene"] = json.loads(row["scene"]) if row["scene"] else {}
-    plots = [write_plot(spec, rows, study.results) for spec in study.plots]
+    columns = headline_columns(study, columns, rows)
+    plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
-    summary = write_summary(study, columns, rows, plots, snapshots)
     if study.cases and study.cases[0].scene.get("kind") == "dislodging":
         from femcontact.scenarios import dislodging
 
         plots += dislodging.report(study)
+    document = summary(study, columns, rows, plots, snapshots)
+    markdown = write_markdown(document, study.results / "summary.md")
+    page = write_html(document, study.results / "index.html", f"Study {study.settings['name']}")
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
-    print(f"  table:     {summary}\n  data:      {csv} and {study.database}")
+    print(f"  summary:   {markdown} and {page} ({len(columns)} columns)")
+    print(f"  data:      {csv} and {study.database} (every column)")
     for path in plots:
         print(f"  plot:      {path}")
     for path in snapshots:
         print(f"  snapshot:  {path}")
     return 0
+
+
+def headline_columns(study, csv_columns: list[str], rows: list[dict]) -> list[str]:
+    """The summary table's columns: [report] columns (each checked against the results), or the
+    default: case id, swept keys, status, the family's primary metrics, wall time (and the failure
+    reason when a case failed), at most MAX_COLUMNS."""
+    declared = study.report.get("columns") or []
+    if declared:
+        for name in declared:
+            if rows and name not in csv_columns and all(get_key(row["scene"], name) is None for row in rows):
+                raise InputError(f"{study.path}: [report] columns: {name!r} is neither a column of results.csv "
+                                 f"nor a scene key (columns: {', '.join(csv_columns)})")
+        return list(declared)
+    failed = any(row["status"] != "ok" for row in rows)
+    default = ["case_id", *study.keys, "status", *units.primary_metrics(csv_columns), "wall"] + \
+        (["reason"] if failed else [])
+    return list(dict.fromkeys(default))[:MAX_COLUMNS]
 
 
 def column(row: dict, name: str):
@@ -66,8 +94,48 @@ def column(row: dict, name: str):
     return get_key(row["scene"], name)
 
 
-def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
-    """One declared plot: y against x for the ok cases, a curve (or marker set) per series value."""
+def curves(spec: dict, rows: list[dict], keys: list[str]) -> list[dict]:
+    """The curves of a line or scatter plot of y against x over the ok cases, each
+    {'label', 'points': [(x, y)] sorted by x, 'joined': draw a line, 'reference': bool}.
+
+    kind "line": a line joins only cases that differ in x alone, i.e. agree on every other swept
+    key (and on `series`); each such set is one curve, labelled by the keys where it differs from
+    the reference, the most common value of each (that curve comes first, labelled with them; in
+    a full grid, where no value is the most common, each curve is labelled with its values). A
+    case with no partner is a lone marker. kind "scatter": one marker set per value of `series`."""
+    x, y, series = spec["x"], spec["y"], spec["series"]
+    points = []
+    for row in rows:
+        xv, yv = column(row, x), column(row, y)
+        if row["status"] == "ok" and _number(xv) and _number(yv) and math.isfinite(yv):
+            points.append((row, xv, yv))
+    if rows and not points:
+        known = sorted(set(rows[0]) - {"scene"})
+        raise InputError(f"[[plot]] {y} against {x}: no ok case has numbers for both (columns: {', '.join(known)}, "
+                         "or any scene key)")
+    others = [k for k in dict.fromkeys(([series] if series else []) + (keys if spec["kind"] == "line" else []))
+              if k != x]
+    counts = [Counter(json.dumps(column(row, k)) for row, _, _ in points).most_common() for k in others]
+    varying = [k for k, count in zip(others, counts) if len(count) > 1]
+    # the reference: the most common value of every key, if no other value is as common (not in a full grid)
+    unique = all(len(count) < 2 or count[0][1] > count[1][1] for count in counts)
+    reference = tuple(count[0][0] for count in counts) if points and unique else None
+    groups: dict = {}
+    for row, xv, yv in points:
+        groups.setdefault(tuple(json.dumps(column(row, k)) for k in others), []).append((xv, yv))
+    out = []
+    for group, xy in sorted(groups.items(), key=lambda item: (item[0] != reference, [_order(v) for v in item[0]])):
+        is_reference = group == reference and len(groups) > 1
+        shown = [k for k, v, r in zip(others, group, reference) if v != r] if reference and not is_reference \
+            else varying
+        name = "; ".join(units.value_label(k, json.loads(v)) for k, v in zip(others, group) if k in shown)
+        out.append({"label": ("reference: " if is_reference else "") + name, "points": sorted(xy),
+                    "joined": spec["kind"] == "line" and len({p[0] for p in xy}) > 1, "reference": is_reference})
+    return out
+
+
+def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> Path:
+    """One declared plot (PNG): the curves of `curves`, or a wedge map; axis labels with units."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -75,34 +143,55 @@ def write_plot(spec: dict, rows: list[dict], results: Path) -> Path:
 
     if spec["kind"] == "wedge_map":
         return write_wedge_map(spec, rows, results)
-    x, y, series = spec["x"], spec["y"], spec["series"]
-    groups: dict = {}
-    for row in rows:
-        if row["status"] != "ok":
-            continue
-        xv, yv = column(row, x), column(row, y)
-        if isinstance(xv, (int, float)) and isinstance(yv, (int, float)) and math.isfinite(yv):
-            value = column(row, series) if series else ""
-            order = (0, value, "") if isinstance(value, (int, float)) else (1, 0, _label(value))
-            groups.setdefault((order, _label(value)), []).append((xv, yv))
-    if rows and not groups:
-        known = sorted(set(rows[0]) - {"scene"})
-        raise InputError(f"[[plot]] {y} against {x}: no ok case has numbers for both (columns: {', '.join(known)}, "
-                         "or any scene key)")
-    figure, axes = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
-    for (_, label), points in sorted(groups.items()):
-        points.sort()
-        style = "o-" if spec["kind"] == "line" else "o"
-        axes.plot(*zip(*points), style, label=f"{series} = {label}" if series else None, markersize=4)
-    axes.set(xlabel=x, ylabel=y, title=spec["title"] or f"{y} against {x}",
-             xscale="log" if spec["logx"] else "linear", yscale="log" if spec["logy"] else "linear")
+    if spec["kind"] in ("force_curves", "sweep", "jam_map"):
+        from femcontact.study import snap_fit_report
+
+        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results, column)
+    from femcontact.study.insertion_plots import PLOTS
+
+    if spec["kind"] in PLOTS:
+        return PLOTS[spec["kind"]](spec, rows, results)
+    x, y = spec["x"], spec["y"]
+    figure, axes = plt.subplots(figsize=(10, 4.8), layout="constrained")
+    colours = iter(plt.get_cmap("tab10").colors * 10)
+    lines = curves(spec, rows, keys)
+    for curve in lines:
+        style = {"color": "black", "linewidth": 2.2} if curve["reference"] else {"color": next(colours)}
+        axes.plot(*zip(*curve["points"]), "o-" if curve["joined"] else "o", markersize=4,
+                  label=textwrap.fill(curve["label"], 45), **style)
+    axes.set(xlabel=units.label(x), ylabel=units.label(y), xscale="log" if spec["logx"] else "linear",
+             yscale="log" if spec["logy"] else "linear")
+    axes.set_title(textwrap.fill(spec["title"] or f"{units.label(y)} against {units.label(x)}", 70), fontsize=11)
+    _plain_log_ticks(axes, spec)
     axes.grid(True, alpha=0.3)
-    if series:
-        axes.legend()
+    if any(curve["label"] for curve in lines):
+        axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
+                    title="joined: cases differing in x only" if spec["kind"] == "line" else None,
+                    title_fontsize=7)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{y}_vs_{x}") + ".png")
     write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
+
+
+def _order(text: str) -> tuple:
+    """Sort key of a JSON-encoded value: numbers by value, before anything else by text."""
+    value = json.loads(text)
+    return (0, value, "") if _number(value) else (1, 0, text)
+
+
+def _plain_log_ticks(axes, spec: dict) -> None:
+    """Tick labels 2, 3, 4 instead of 2 x 10^0 on a log axis spanning less than two decades."""
+    from matplotlib.ticker import FuncFormatter
+
+    for name, axis, limits in (("logx", axes.xaxis, axes.get_xlim()), ("logy", axes.yaxis, axes.get_ylim())):
+        if spec[name] and min(limits) > 0 and max(limits) / min(limits) < 100:
+            axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+            axis.set_minor_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
@@ -134,7 +223,7 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
     if rows and not points:
         raise InputError(f"[[plot]] wedge_map {y} against {x}: no ok case has numbers for both and the metrics "
                          "wedged, analytic_wedged")
-    figure, axes = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    figure, axes = plt.subplots(figsize=(9, 5), layout="constrained")
     for wedged, marker, label in ((True, "o", "simulated: wedged"), (False, "x", "simulated: not wedged")):
         for agree, colour in ((True, "tab:green"), (False, "tab:red")):
             chosen = [(p[0], p[1]) for p in points if p[2] == wedged and (p[2] == p[3]) == agree]
@@ -153,28 +242,38 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
             axes.plot(grid, d * np.sqrt(1 / (1 - grid) ** 2 - 1), "k--", label="l_crit(c)")
             for mu in sorted({column(p[4], "contact.mu") for p in points}):
                 axes.axhline(mu * d, color="k", linestyle=":", label=f"l_max = mu d (mu = {mu:g})")
+                axes.annotate(f"mu = {mu:g}", (1.0, mu * d), xycoords=("axes fraction", "data"), xytext=(-3, 2),
+                              textcoords="offset points", ha="right", va="bottom", fontsize=7,
+                              annotation_clip=True)
         else:
             axes.plot(grid, grid * d, "k:", label="l_max = mu d")
             for D in sorted({column(p[4], "hole.width") for p in points}):
                 axes.axhline(math.sqrt(D * D - d * d), color="k", linestyle="--", label=f"l_crit (D = {D:g})")
+                axes.annotate(f"l_crit, D = {D:g}", (1.0, math.sqrt(D * D - d * d)), xycoords=("axes fraction", "data"),
+                              xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom", fontsize=7,
+                              annotation_clip=True)
         axes.set_ylim(0, max(p[1] for p in points) * 1.15)
     agree = sum(p[2] == p[3] for p in points)
-    axes.set(xlabel=x, ylabel=y, title=(spec["title"] or f"wedge map: {y} against {x}")
-             + f"\nagreement with the analytic condition: {agree}/{len(points)}",
+    axes.set(xlabel=units.label(x), ylabel=units.label(y),
              xscale="log" if spec["logx"] else "linear", yscale="log" if spec["logy"] else "linear")
+    title = spec["title"] or f"wedge map: {units.label(y)} against {units.label(x)}"
+    axes.set_title(textwrap.fill(title, 60) + f"\nagreement with the analytic condition: {agree}/{len(points)}",
+                   fontsize=11)
+    _plain_log_ticks(axes, spec)
     axes.grid(True, alpha=0.3)
-    axes.legend(fontsize=7)
+    if points:
+        axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
     write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
     plt.close(figure)
     return path
 
 
-def wedge_table(rows: list[dict]) -> list[str]:
-    """Markdown lines: agreement of the simulated `wedged` with `analytic_wedged`, overall, away from
-    the bounds and near them (`near_boundary`), and the disagreeing cases. Empty without those metrics."""
+def wedge_table(rows: list[dict]) -> list[tuple]:
+    """Summary blocks: agreement of the simulated `wedged` with `analytic_wedged`, overall, away from
+    the bounds and near them (`near_boundary`), and the disagreeing cases. None without those metrics."""
     cases = [row for row in rows if row["status"] == "ok"
-             and isinstance(column(row, "wedged"), (int, float)) and isinstance(column(row, "analytic_wedged"), (int, float))]
+             and _number(column(row, "wedged")) and _number(column(row, "analytic_wedged"))]
     if not cases:
         return []
 
@@ -185,24 +284,16 @@ def wedge_table(rows: list[dict]) -> list[str]:
 
     near = [r for r in cases if column(r, "near_boundary")]
     far = [r for r in cases if not column(r, "near_boundary")]
-    lines = ["## Wedge map: simulated against l_crit <= l_d <= mu d", "",
-             "| cases | agree |", "|---|---|", f"| all | {rate(cases)} |",
-             f"| away from the bounds | {rate(far)} |", f"| near a bound (within 5 % of mu d) | {rate(near)} |", ""]
+    blocks = [("h2", "Wedge map: simulated against l_crit <= l_d <= mu d"),
+              ("table", ["cases", "agree"], [["all", rate(cases)], ["away from the bounds", rate(far)],
+                                             ["near a bound (within 5 % of mu d)", rate(near)]])]
     wrong = [r for r in cases if bool(column(r, "wedged")) != bool(column(r, "analytic_wedged"))]
     if wrong:
-        lines += ["Disagreements:", "", "| case | d | D | mu | l_d | l_crit | l_max | simulated | reason | residual A |",
-                  "|---|---|---|---|---|---|---|---|---|---|"]
-        for r in wrong:
-            lines.append("| " + " | ".join(_cell(v) for v in (
-                r["case_id"], column(r, "peg.width"), column(r, "hole.width"), column(r, "contact.mu"),
-                column(r, "peg.insertion_depth"), column(r, "l_crit"), column(r, "l_max"),
-                bool(column(r, "wedged")), column(r, "wedge_reason"), column(r, "residual_force_A"))) + " |")
-        lines.append("")
-    return lines
-
-
-def _label(value) -> str:
-    return f"{value:g}" if isinstance(value, float) else str(value)
+        names = ["case_id", "peg.width", "hole.width", "contact.mu", "peg.insertion_depth", "l_crit", "l_max",
+                 "wedged", "wedge_reason", "residual_force_A"]
+        blocks += [("p", "Disagreements:"),
+                   ("table", [units.label(n) for n in names], [[_cell(column(r, n), n) for n in names] for r in wrong])]
+    return blocks
 
 
 def write_snapshots(study, rows: dict) -> list[Path]:
@@ -242,31 +333,111 @@ def _matches(scene: dict, selector: dict) -> bool:
     return all(same(get_key(scene, key), value) for key, value in selector.items())
 
 
-def write_summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> Path:
-    """results/NAME/summary.md: counts, the table of cases, the pictures."""
-    shown = [c for c in columns if c not in ("python", "dolfinx", "petsc4py", "numpy", "mpi4py", "git_commit")]
+def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> list[tuple]:
+    """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
+    written as Markdown and as HTML."""
     ok = sum(row["status"] == "ok" for row in rows)
-    description = [study.settings["description"], ""] if study.settings["description"] else []
-    lines = [f"# Study {study.settings['name']}", "", *description,
-             f"{len(study.cases)} cases: {ok} ok, {len(rows) - ok} failed, {len(study.cases) - len(rows)} not run. "
-             f"Study file `{study.path}`; data in `results.csv` and `results.sqlite`.", ""]
+    blocks = [("h1", f"Study {study.settings['name']}")]
+    if study.settings["description"]:
+        blocks.append(("p", study.settings["description"]))
+    blocks.append(("p", f"{len(study.cases)} cases: {ok} ok, {len(rows) - ok} failed, "
+                        f"{len(study.cases) - len(rows)} not run. Study file `{study.path}`; every column "
+                        "(all metrics, timings, versions) in `results.csv` and `results.sqlite`."))
     if rows:
         commits = sorted({str(row.get("git_commit")) for row in rows})
-        lines += [f"Code: git {', '.join(commits)}; dolfinx {rows[0].get('dolfinx')}, "
-                  f"python {rows[0].get('python')}.", "",
-                  "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
-        lines += ["| " + " | ".join(_cell(row.get(c)) for c in shown) + " |" for row in rows]
-    lines += [""] + wedge_table(rows)
-    lines += [""] + [f"![{p.stem}]({p.name})" for p in plots]
-    lines += [""] + [f"![{p.stem}](snapshots/{p.name})" for p in snapshots]
-    path = study.results / "summary.md"
+        blocks.append(("p", f"Code: git {', '.join(commits)}; dolfinx {rows[0].get('dolfinx')}, "
+                            f"python {rows[0].get('python')}."))
+        blocks.append(("table", [units.label(c) for c in columns],
+                       [[_cell(column(row, c), c) for c in columns] for row in rows]))
+    blocks += wedge_table(rows)
+    from femcontact.study.snap_fit_report import table as snap_fit_table
+
+    blocks += snap_fit_table(rows, column)
+    if plots:
+        blocks.append(("h2", "Plots"))
+        blocks += [("img", p.name, p.stem) for p in plots]
+    if snapshots:
+        by_id = {case.id: case for case in study.cases}
+        blocks.append(("h2", "Stress snapshots"))
+        blocks += [("img", f"snapshots/{p.name}", f"case {p.stem}: " + "; ".join(
+            units.value_label(k, v) for k, v in by_id[p.stem].params.items())) for p in snapshots]
+    return blocks
+
+
+def write_markdown(blocks: list[tuple], path: Path) -> Path:
+    """summary.md of the report blocks."""
+    lines = []
+    for kind, *content in blocks:
+        if kind in ("h1", "h2"):
+            lines += [("# " if kind == "h1" else "## ") + content[0], ""]
+        elif kind == "p":
+            lines += [content[0], ""]
+        elif kind == "table":
+            header, body = content
+            lines += ["| " + " | ".join(map(_markdown, header)) + " |", "|" + "---|" * len(header)]
+            lines += ["| " + " | ".join(map(_markdown, cells)) + " |" for cells in body] + [""]
+        else:
+            lines += [f"![{content[1]}]({content[0]})", ""]
     write_text_atomic(path, "\n".join(lines).rstrip() + "\n")
     return path
 
 
-def _cell(value) -> str:
-    if value is None:
-        return ""
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return str(value).replace("|", "\\|").replace("\n", " ")
+HTML_STYLE = """body { font-family: sans-serif; margin: 1.5em; color: #222; }
+table { border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }
+th, td { border: 1px solid #bbb; padding: 2px 6px; text-align: right; white-space: nowrap; }
+th { background: #eee; position: sticky; top: 0; white-space: normal; max-width: 9em; vertical-align: bottom; }
+td.text { text-align: left; }
+.wide { overflow-x: auto; }
+figure { margin: 1em 0 2em; }
+img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: 13px; color: #555; }"""
+
+
+def write_html(blocks: list[tuple], path: Path, title: str) -> Path:
+    """index.html of the report blocks: the same text, tables and pictures as summary.md."""
+    parts = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+             f"<title>{html.escape(title)}</title>", f"<style>\n{HTML_STYLE}\n</style>", "</head>", "<body>"]
+    for kind, *content in blocks:
+        if kind in ("h1", "h2", "p"):
+            parts.append(f"<{kind}>{_inline_html(content[0])}</{kind}>")
+        elif kind == "table":
+            header, body = content
+            parts.append('<div class="wide"><table>')
+            parts.append("<thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr></thead>")
+            parts.append("<tbody>")
+            for cells in body:
+                parts.append("<tr>" + "".join(
+                    f"<td>{html.escape(c)}</td>" if _numeric_text(c) else f'<td class="text">{html.escape(c)}</td>'
+                    for c in cells) + "</tr>")
+            parts.append("</tbody></table></div>")
+        else:
+            source, caption = content
+            parts.append(f'<figure><img src="{html.escape(source)}" alt="{html.escape(caption)}">'
+                         f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+    parts += ["</body>", "</html>"]
+    write_text_atomic(path, "\n".join(parts) + "\n")
+    return path
+
+
+def _inline_html(text: str) -> str:
+    """Escaped text with `code` spans."""
+    return re.sub(r"`([^`]*)`", r"<code>\1</code>", html.escape(text))
+
+
+def _numeric_text(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def _cell(value, name: str = "") -> str:
+    """A table cell: yes/no for flags, numbers to 4 significant digits, lists as (a, b)."""
+    if name in units.FLAGS and value in (0, 1):
+        return "yes" if value else "no"
+    return units.format_value(value).replace("\n", " ")
+
+
+def _markdown(text: str) -> str:
+    return text.replace("|", "\\|")

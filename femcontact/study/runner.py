@@ -61,8 +61,13 @@ SCHEMA = {
         "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
         "y": Field("str", doc="column on the y axis"),
         "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter or wedge_map (wedged markers + analytic bounds)",
-                      choices=("line", "scatter", "wedge_map")),
+        "kind": Field("str", "line", "line, scatter, wedge_map (wedged markers + analytic bounds), force_curves "
+                      "(list metrics against each other, reduced model beside), sweep (a metric, model beside), jam_map "
+                      "(snap fit); insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
+                      choices=("line", "scatter", "wedge_map", "force_curves", "sweep", "jam_map", "insertion_history",
+                               "jamming_diagram", "wedging_window")),
+        "select": Field("any", {}, "force_curves, sweep: only cases whose scene has key = value (or one of a list)",
+                        check=lambda v: None if isinstance(v, dict) else "must be a table"),
         "logx": Field("bool", False, "logarithmic x axis"),
         "logy": Field("bool", False, "logarithmic y axis"),
         "title": Field("str", "", "plot title"),
@@ -78,7 +83,22 @@ SCHEMA = {
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
     },
+    "report": {
+        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
+                         "default: swept keys, status, the family's primary metrics, wall time)",
+                         check=lambda v: _check_columns(v)),
+    },
 }
+MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
+
+
+def _check_columns(columns: list[str]) -> str | None:
+    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
+    if bad:
+        return f"column {bad[0]!r} is empty or repeated"
+    if len(columns) > MAX_COLUMNS:
+        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
+    return None
 
 
 def flatten(table: dict, prefix: str = "") -> dict:
@@ -142,6 +162,7 @@ class Study:
     results: Path
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -209,7 +230,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         case.params = {key: get_key(case.scene, key) for key in keys}
     if settings["shared_steps"]:
         _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"])
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
 
 
 def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
@@ -333,13 +354,14 @@ def femcontact_command() -> list[str]:
 
 
 def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Delete JIT sources whose compiled module is missing: a case killed while compiling
-    leaves them, and DOLFINx then waits for that compilation until its timeout. Safe
+    """Delete JIT sources (and their ready marks) whose compiled module is missing: a case killed
+    while compiling leaves them, and FFCx then waits for that compilation until its timeout. Safe
     here: the runner holds the study lock and its job slots' caches are its own (a SLURM
     task cleans only the slot it holds)."""
     for source in cache_root.glob(f"{slots}/fenics/*.c"):
         if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
             source.unlink(missing_ok=True)
+            source.with_suffix(".c.cached").unlink(missing_ok=True)  # its 'ready' mark, if any
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:

@@ -23,7 +23,7 @@ from femcontact.study.slurm import active_tasks, read_submissions
 from femcontact.study.runner import load_study
 
 REPO = Path(__file__).resolve().parents[2]
-FAKE_CASE = REPO / "tests" / "fake_case.py"
+FAKE_CASE = REPO / "tests" / "support" / "fake_case.py"
 SRUN_FAKE = f"srun -n {{ranks}} {sys.executable} {FAKE_CASE}"
 IGNORED = ("wall",)  # and every time.* column: measured durations
 

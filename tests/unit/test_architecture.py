@@ -8,7 +8,7 @@
 import ast
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EFFECT_WORDS = {"friction", "inertia", "gravity", "anchor", "corners", "rigid_corners", "stick", "slip", "newmark"}
 
 

@@ -1,7 +1,8 @@
-"""Synthetic `fields.npz` files (the format `femcontact.snapshot.render` reads), for tests.
+"""Synthetic `fields.npz` files (the format `femcontact.outputs.snapshot.render` reads), for tests.
 
 A block under a pressed rigid disc: structured triangles (2-D) or tetrahedra (3-D),
-von Mises = 100 / (1 + r^2) around the contact point (0, 0(, 0)), a displacement that
+von Mises = 100 / (1 + r^2) around the contact point (0, 0(, 0)) (or, `singular`, a corner
+singularity 1 / (r + 1e-4) with its peak 1e4 at that one node), a displacement that
 dents the top face, the disc outline as `rigid_outline` and `contact_A` as a named point.
 """
 import itertools
@@ -33,11 +34,11 @@ def block_mesh(dim: int, n: int = 12):
     return points, np.array(cells, dtype=np.int64)
 
 
-def write_fields(path, dim: int = 2, cellwise: bool = False) -> np.ndarray:
+def write_fields(path, dim: int = 2, cellwise: bool = False, singular: bool = False) -> np.ndarray:
     """Write a synthetic fields.npz; returns the von Mises array written."""
     points, cells = block_mesh(dim)
     r2 = (points ** 2).sum(axis=1)
-    nodal = 100.0 / (1.0 + r2)
+    nodal = 1.0 / (np.sqrt(r2) + 1e-4) if singular else 100.0 / (1.0 + r2)
     von_mises = nodal[cells].mean(axis=1) if cellwise else nodal
     displacement = np.zeros_like(points)
     displacement[:, 1] = -0.2 * np.exp(-r2 / 4)

@@ -13,7 +13,7 @@ import pytest
 
 from femcontact.config.scene import load_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "scenes" / "wedging_2d.toml"
 
 

@@ -13,7 +13,7 @@ from femcontact.errors import InputError
 from femcontact.config.scene import resolve
 from femcontact.physics.rotation import rotation_numpy as rotation_zyx
 
-DATA = Path(__file__).resolve().parent / "data" / "rcc_validation.csv"
+DATA = Path(__file__).resolve().parents[1] / "data" / "rcc_validation.csv"
 ROWS = list(csv.DictReader(line for line in open(DATA) if not line.startswith("#")))
 DEVICE = rcc.Rcc(50, 50, 70, 200)
 

@@ -16,7 +16,7 @@ from femcontact.references import peg_in_hole
 from femcontact.references import whitney as w
 
 DRAPER = {row["quantity"]: float(row["value"]) for row in csv.DictReader(
-    line for line in open(Path(__file__).parent / "data" / "whitney_draper.csv") if not line.startswith("#"))}
+    line for line in open(Path(__file__).parents[1] / "data" / "whitney_draper.csv") if not line.startswith("#"))}
 # Our calibration: eps0 = 1.9 mm places the two-point onset near the published 9 mm (docs/whitney.md);
 # the chamfer (2.5 mm at 45 deg) is our choice, the source gives none.
 CASE = w.draper(lateral_error=1.9, chamfer_width=2.5)

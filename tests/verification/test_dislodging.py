@@ -12,7 +12,7 @@ from femcontact.scenarios.dynamics import DynamicSimulation, Event, kinks, pulse
 from femcontact.solver.loading import Schedule, pulse
 from femcontact.config.scene import resolve
 
-THESIS = Path(__file__).parent / "data" / "dislodging_thesis.csv"
+THESIS = Path(__file__).resolve().parents[1] / "data" / "dislodging_thesis.csv"
 
 
 def flat_punch_scene(steps, effects, mass, gravity=0.0, method="nitsche", mu=0.2) -> dict:
@@ -187,7 +187,7 @@ def wedged_peg():
     from femcontact.scenarios.dislodging import Puller
     from femcontact.config.scene import load_scene
 
-    scene = load_scene(Path(__file__).parent.parent / "scenes" / "dislodging_2d.toml",
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
                        ["mesh.resolution=0.5", "dislodging.tolerance=0.02"])
     return Puller(scene)
 

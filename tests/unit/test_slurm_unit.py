@@ -4,7 +4,7 @@ crashes, is cancelled or its shared prefix failed.
 
 `sbatch` and `squeue` are stand-ins on PATH: sbatch keeps the script and answers job ids 100, 101, ...;
 squeue prints the lines of $FAKE_SQUEUE ("JOB|INDICES|STATE"). The array tasks are run directly
-(`python -m femcontact.study.slurm task MANIFEST INDEX`) with tests/fake_case.py as the case. The real
+(`python -m femcontact.study.slurm task MANIFEST INDEX`) with tests/support/fake_case.py as the case. The real
 cluster test is tests/slurm/ (`make test-slurm`).
 """
 import json
@@ -24,7 +24,7 @@ from femcontact.study.slurm import (active_tasks, default_time, expand_indices, 
 from femcontact.study.runner import load_study
 
 HERE = Path(__file__).parent
-sys.path.insert(0, str(HERE))
+SUPPORT = HERE.parent / "support"
 from test_study import FAKE, make_study  # noqa: E402  (the study runner's fake case and study files)
 
 SBATCH = """#!/bin/bash

@@ -1,18 +1,20 @@
 """The study runner: case ids, sweep expansion, resume after SIGKILL, failures, time limit,
 database and CSV, MPI cases, shared prefixes, plots and snapshots.
 
-Cases run through a fake launcher (tests/fake_case.py) that writes result.json like
+Cases run through a fake launcher (tests/support/fake_case.py) that writes result.json like
 `femcontact run` does, so these tests depend neither on the solver nor on the RCC code.
 """
 import csv
 import json
 import os
+import re
 import signal
 import sqlite3
 import subprocess
 import sys
 import time
 import tomllib
+from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +28,8 @@ from femcontact.config.schema import set_key
 from femcontact.study.runner import expand, load_study, to_toml
 
 HERE = Path(__file__).parent
-FAKE = f"{sys.executable} {HERE / 'fake_case.py'}"
+SUPPORT = HERE.parent / "support"
+FAKE = f"{sys.executable} {SUPPORT / 'fake_case.py'}"
 PNG = b"\x89PNG\r\n\x1a\n"
 
 BASE = """
@@ -227,7 +230,7 @@ def test_real_rcc_cases_on_two_mpi_ranks(tmp_path, fake, monkeypatch):
                         ("OMPI_MCA_rmaps_base_oversubscribe", "1")):
         monkeypatch.setenv(name, value)
     path = tmp_path / "rcc.toml"
-    path.write_text(f'[study]\nname = "rcc"\nscene = "{HERE.parent / "scenes/rcc.toml"}"\nranks_per_case = 2\n'
+    path.write_text(f'[study]\nname = "rcc"\nscene = "{HERE.parents[1] / "scenes/rcc.toml"}"\nranks_per_case = 2\n'
                     'jobs = 1\n[sweep]\ngrid = { "rcc.theta_l" = [60.0, 70.0] }\n')
     assert run_study(path) == 0
     rows = Database(tmp_path / "results/rcc/results.sqlite", ["rcc.theta_l"]).rows()
@@ -248,13 +251,40 @@ def test_shared_prefix_runs_once_and_variants_restart_from_it(tmp_path, fake):
 
 # -- report ---------------------------------------------------------------------------------------
 
-def test_report_writes_plots_summary_and_snapshots(tmp_path, fake, monkeypatch, capsys):
+class Page(HTMLParser):
+    """The table headers, body rows and image sources of an index.html."""
+
+    def __init__(self):
+        super().__init__()
+        self.headers, self.rows, self.images, self.cell = [], [], [], None
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "tr":
+            self.rows.append([])
+        elif tag in ("th", "td"):
+            self.cell = ""
+        elif tag == "img":
+            self.images.append(dict(attrs)["src"])
+
+    def handle_data(self, data):
+        if self.cell is not None:
+            self.cell += data
+
+    def handle_endtag(self, tag):
+        if tag in ("th", "td"):
+            (self.headers if tag == "th" else self.rows[-1]).append(self.cell)
+            self.cell = None
+
+
+def test_report_writes_plots_summary_html_and_snapshots(tmp_path, fake, monkeypatch, capsys):
     path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2], "contact.gamma" = [1.0, 2.0] }\n'
                                 '[[plot]]\nx = "contact.mu"\ny = "product"\nseries = "contact.gamma"\n'
                                 '[[plot]]\nx = "contact.gamma"\ny = "time.total"\nkind = "scatter"\n'
                                 'logy = true\nfile = "timing.png"\n'
                                 '[snapshots]\nselect = [ { "contact.mu" = 0.1, "contact.gamma" = 2.0 } ]\n'
-                                'zoom = "contact_A"')
+                                'zoom = "contact_A"\n'
+                                '[report]\ncolumns = ["case_id", "contact.mu", "contact.gamma", "status", "product", '
+                                '"time.total"]')
     monkeypatch.setenv("FAKE_FIELDS", "2")
     assert run_study(path) == 0
     assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
@@ -265,20 +295,115 @@ def test_report_writes_plots_summary_and_snapshots(tmp_path, fake, monkeypatch, 
     assert len(pictures) == 3 and all(p.read_bytes()[:8] == PNG and str(p) in out for p in pictures)
     summary = (results / "summary.md").read_text()
     assert "4 cases: 4 ok" in summary and summary.count("| ok |") == 4
+    headers = ["case", "friction mu", "Nitsche gamma", "status", "product", "time total (s)"]
+    assert "| " + " | ".join(headers) + " |" in summary.splitlines()
+
+    page = Page()
+    page.feed((results / "index.html").read_text())
+    assert page.headers == headers and len(page.rows) == 1 + 4 and all(len(r) == 6 for r in page.rows[1:])
+    by_mu_gamma = {(float(r[1]), float(r[2])): float(r[4]) for r in page.rows[1:]}
+    assert by_mu_gamma == pytest.approx({(0.1, 1.0): 0.1, (0.1, 2.0): 0.2, (0.2, 1.0): 0.2, (0.2, 2.0): 0.4})
+    assert sorted(results / src for src in page.images) == sorted(pictures)
+    assert sorted(page.images) == sorted(re.findall(r"!\[[^]]*\]\(([^)]+)\)", summary))
+
+
+def test_report_columns_default_and_checked(tmp_path, fake, capsys):
+    sweep = '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2], "contact.gamma" = [1.0, 2.0] }\n'
+    path = make_study(tmp_path, sweep)
+    assert run_study(path) == 0
+    assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
+    summary = (tmp_path / "results/demo/summary.md").read_text().splitlines()
+    header = next(line for line in summary if line.startswith("| case |"))
+    assert header == "| case | friction mu | Nitsche gamma | status | wall time (s) |"
+
+    path.write_text(path.read_text() + '[report]\ncolumns = ["contact.mu", "prodcut"]\n')
+    assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 2
+    assert "[report] columns: 'prodcut' is neither a column of results.csv nor a scene key" in capsys.readouterr().err
+    path.write_text(path.read_text().replace('"prodcut"', '"contact.theta"'))  # a scene key that is not swept
+    assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
+    path.write_text(path.read_text().replace('"contact.theta"', '"contact.mu"'))
+    with pytest.raises(InputError, match="report.columns = .*column 'contact.mu' is empty or repeated"):
+        load_study(path)
+    make_study(tmp_path, sweep + "[report]\ncolumns = [" + ", ".join(f'"c{i}"' for i in range(26)) + "]\n")
+    with pytest.raises(InputError, match="26 columns, at most 25"):
+        load_study(path)
+
+
+def test_plot_lines_join_only_cases_differing_in_x():
+    from femcontact.study.report import curves
+
+    def row(a, b, c):
+        return {"case_id": f"{a}-{b}-{c}", "status": "ok", "scene": {}, "a": a, "b": b, "c": c, "y": a * b + c}
+
+    rows = [row(a, 1.0, 1.0) for a in (1.0, 2.0, 3.0, 4.0)] + [row(a, 2.0, 1.0) for a in (1.0, 2.0)] + \
+        [row(3.0, 1.0, 2.0)] + [row(a, 2.0, 2.0) for a in (2.0, 1.0)] + [{**row(5.0, 1.0, 1.0), "status": "failed"}]
+    spec = {"x": "a", "y": "y", "series": "", "kind": "line"}
+    lines = curves(spec, rows, ["a", "b", "c"])
+    assert [line["label"] for line in lines] == ["reference: b = 1; c = 1", "c = 2", "b = 2", "b = 2; c = 2"]
+    assert [line["joined"] for line in lines] == [True, False, True, True]
+    assert lines[0]["reference"] and not any(line["reference"] for line in lines[1:])
+    for line in lines:  # every curve is one (b, c): y - a b is constant along it, and x increases
+        b = 2.0 if "b = 2" in line["label"] else 1.0
+        assert len({y - a * b for a, y in line["points"]}) == 1
+        assert [a for a, _ in line["points"]] == sorted(a for a, _ in line["points"])
+    assert sum(len(line["points"]) for line in lines) == 9  # the failed case is left out
+    scatter = curves({**spec, "kind": "scatter", "series": "b"}, rows, ["a", "b", "c"])
+    assert [(line["label"], len(line["points"]), line["joined"]) for line in scatter] == \
+        [("reference: b = 1", 5, False), ("b = 2", 4, False)]
+    assert curves(spec, [], ["a", "b", "c"]) == []  # nothing run yet
+    grid = [row(a, b, 1.0) for a in (1.0, 2.0) for b in (10.0, 2.0)]  # a full grid: no value is the most common
+    assert [(line["label"], line["reference"], line["joined"]) for line in curves(spec, grid, ["a", "b", "c"])] == \
+        [("b = 2", False, True), ("b = 10", False, True)]
+
+
+def _dark_blue_share(png) -> float:
+    """Share of the coloured pixels (not white, grey or black) in jet's lowest colour (0, 0, 0.5)."""
+    import matplotlib.pyplot as plt
+
+    rgb = plt.imread(png)[..., :3]
+    coloured = rgb.max(axis=-1) - rgb.min(axis=-1) > 0.25
+    bottom = (rgb[..., 0] < 0.1) & (rgb[..., 1] < 0.1) & (rgb[..., 2] > 0.3) & (rgb[..., 2] < 0.6)  # 3-D: lit
+    return float((bottom & coloured).sum() / coloured.sum())
 
 
 @pytest.mark.parametrize("dim, cellwise", [(2, False), (3, True)])
-def test_snapshot_colour_bar_spans_the_field(tmp_path, dim, cellwise):
-    import matplotlib.pyplot as plt
-
-    sys.path.insert(0, str(HERE))
+def test_snapshot_colour_range_clips_a_singular_peak(tmp_path, dim, cellwise):
     from synthetic_fields import write_fields
 
     from femcontact.outputs.snapshot import render
 
-    von_mises = write_fields(tmp_path / "fields.npz", dim, cellwise)
+    von_mises = write_fields(tmp_path / "fields.npz", dim, cellwise, singular=True)
     info = render(tmp_path / "fields.npz", tmp_path / "s.png", zoom="contact_A")
-    assert info["range"] == pytest.approx((von_mises.min(), von_mises.max()), rel=1e-12)
-    image = plt.imread(tmp_path / "s.png")
-    assert (tmp_path / "s.png").read_bytes()[:8] == PNG and image.shape[0] > 100
-    assert len(np.unique(image.reshape(-1, image.shape[-1]), axis=0)) > 50  # not a blank picture
+    with np.load(tmp_path / "fields.npz") as fields:
+        cells, n_points = fields["cells"], len(fields["points"])
+    # the structured mesh's cells all have one size: a node's share of the body is proportional to
+    # its number of cells, a cell's share is one
+    share = np.bincount(cells.ravel(), minlength=n_points).astype(float) if not cellwise else np.ones(len(cells))
+    low, high = info["ranges"][0]
+    assert low == pytest.approx(von_mises.min(), rel=1e-12)
+    assert share[von_mises > high].sum() <= 0.01 * share.sum() < share[von_mises >= high].sum()
+    assert high < 0.01 * von_mises.max()  # the peak of 1e4 (or its cell mean) is far outside the range
+    assert info["peak"]["value"] == von_mises.max() and info["peak"]["near"] == "contact_A"
+    assert info["peak"]["distance"] == pytest.approx(0.0 if not cellwise else 0.3, abs=0.3)
+    assert (tmp_path / "s.png").read_bytes()[:8] == PNG
+    render(tmp_path / "fields.npz", tmp_path / "body.png")
+    shown = _dark_blue_share(tmp_path / "body.png")
+    render(tmp_path / "fields.npz", tmp_path / "full.png", percentile=100.0)
+    unclipped = _dark_blue_share(tmp_path / "full.png")
+    print(f"\nshare of the picture in the lowest colour: {shown:.2f} clipped, {unclipped:.2f} min..max")
+    if dim == 2:  # exact colours (no lighting): nearly all of the body in the lowest colour without clipping
+        assert unclipped > 0.8 and shown < 0.2
+    else:  # lit faces: the shading blurs the colour classes
+        assert shown < unclipped - 0.2
+
+
+def test_offscreen_snapshot_prints_no_display_warning(tmp_path):
+    from synthetic_fields import write_fields
+
+    write_fields(tmp_path / "fields.npz", 2)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "VTK_DEFAULT_OPENGL_WINDOW")}
+    done = subprocess.run([sys.executable, "-c", "import sys; from femcontact.outputs.snapshot import render; "
+                           "render(sys.argv[1], sys.argv[2])", str(tmp_path / "fields.npz"), str(tmp_path / "s.png")],
+                          env=env, capture_output=True, text=True)
+    assert done.returncode == 0 and (tmp_path / "s.png").exists(), done.stderr
+    assert done.stderr == "" and done.stdout == ""

@@ -84,3 +84,20 @@ def test_plane_stress_softens_lambda():
     energy = [fem.assemble_scalar(fem.form(p.energy_density * p.dx)) for p in (strain, stress)]
     E, nu = 1000.0, 0.25
     assert energy[1] / energy[0] == pytest.approx((E / (1 - nu * nu)) / (E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))))
+
+
+def test_compliant_support_is_built_only_when_named():
+    """Named: the peg's equations gain the support's springs (a pose error gives -K q at C);
+    not named: no support terms at all."""
+    from pathlib import Path
+
+    from femcontact.config.scene import load_scene
+
+    path = Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml"
+    coarse = ["mesh.contact_size=1.0", "mesh.size_max=3.0", "mesh.contact_zone=1.0", "steps.0.support_motion.y=0.0"]
+    for effects, built in ((["friction", "plane_strain", "compliant_support"], True), (["friction", "plane_strain"], False)):
+        scene = load_scene(path, coarse + [f"effects={effects}"])
+        p = Problem(scene, build(scene, MPI.COMM_WORLD))
+        assert ("compliant_support" in p.built) == built
+        p.rigid.values[:] = [0.01, 0.0, 0.0]
+        assert p.rigid_residual(None)[0] == pytest.approx(scene["support"]["kx"] * 0.01 if built else 0.0)

@@ -14,7 +14,7 @@ import pytest
 from femcontact.config.scene import load_scene
 from femcontact.solver.stepping import Simulation
 
-SCENE = Path(__file__).parents[1] / "scenes" / "wedging_3d.toml"
+SCENE = Path(__file__).parents[2] / "scenes" / "wedging_3d.toml"
 
 
 def zone(row: dict, name: str) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,7 @@ database that agrees with the case directories.
 
 The CLI runs in-process (`femcontact.cli.main`). Read-only and full file systems are real:
 small tmpfs mounts (root; skipped where mounting is not allowed) or, for read-only without
-root, a chmod 555 directory. Studies run through tests/fake_case.py (no solver).
+root, a chmod 555 directory. Studies run through tests/support/fake_case.py (no solver).
 """
 import contextlib
 import json
@@ -21,10 +21,11 @@ import pytest
 from femcontact.cli import main
 
 HERE = Path(__file__).parent
-SCENES = HERE.parent / "scenes"
+SUPPORT = HERE.parent / "support"
+SCENES = HERE.parents[1] / "scenes"
 WEDGING = str(SCENES / "wedging_2d.toml")
 RCC = str(SCENES / "rcc.toml")
-FAKE = f"{sys.executable} {HERE / 'fake_case.py'}"
+FAKE = f"{sys.executable} {SUPPORT / 'fake_case.py'}"
 BLOCK = """kind = "contact"
 dim = 2
 geometry = "block"

@@ -14,7 +14,7 @@ import pytest
 from femcontact.scenarios import wedging
 from femcontact.config.scene import load_scene
 
-SCENE = Path(__file__).parent.parent / "scenes" / "wedging_2d.toml"
+SCENE = Path(__file__).parents[2] / "scenes" / "wedging_2d.toml"
 RESOLUTION = 0.5
 YIELD = 210.0
 

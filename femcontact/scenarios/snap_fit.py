@@ -1,0 +1,135 @@
+"""Snap-fit metrics (Whitney ch. 11): insertion and withdrawal force against depth.
+
+Signs (femcontact.references.snap_fit): the pin moves down to insert; the contact force on
+the pin has an axial part F_ax, positive upwards (against insertion), and a lateral part
+F_lat, the sum over the springs of the magnitude of each spring's lateral force. The 2-D
+history is per mm of out-of-plane width; every force here (N) is multiplied by
+`spring.width`. Depth is the pin's travel past the first touch of its nose on the apex
+(travel less `peg.start_gap`).
+
+- insertion_force = F_ax during the step `insert` (what the actuator pushes with),
+  withdrawal_force = -F_ax during `withdraw` (what it pulls with; negative: the springs eject
+  the pin), each against depth (lists), with lateral_force / withdrawal_lateral_force;
+- final_contact_force: each spring's lateral force at the end of insertion (N);
+- insertion_force_ratio / withdrawal_force_ratio: F_ax / F_lat averaged over the increments
+  whose contact lies on the nose (not on the shank) and whose lateral force is above
+  `RATIO_FLOOR` of its peak: on a flat taper, the statics tan(alpha +- phi);
+- jammed: in some insertion increment the apex of spring B is in contact with the nose
+  and its force lies strictly inside the friction cone about the nose's normal, i.e. the
+  apex sticks to the nose and is pushed along instead of sliding (`STICK_MARGIN`);
+- max_von_mises, yield_ratio (its ratio to the spring's yield stress), yielded: the FE field's
+  largest value, which includes the stress concentration at the sharp apex under contact;
+- root_stress: the beam stress at the root of spring B, 6 |M| / h^2 + |N| / h (MPa) from the
+  support's reactions (M about the root's centre), and root_yield_ratio, its ratio to yield;
+- the reduced model's peak insertion force and jam prediction beside them.
+"""
+import math
+
+import numpy as np
+
+from femcontact.references import snap_fit as reference
+
+RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
+STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
+NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
+
+
+def _zones(scene: dict) -> list[str]:
+    return ["B", "A"][: scene["spring"]["count"]]
+
+
+def forces(scene: dict, rows: list[dict]) -> dict:
+    """Per row: depth (mm), F_ax, F_lat (N), the contact point's z on the nose (mm) and the
+    force of spring B split along the nose's normal and tangent there (N)."""
+    from geometry.snap_fit import layout, nose_profile
+
+    width, nose, place = scene["spring"]["width"], nose_profile(scene["peg"]), layout(scene)
+    out = {key: [] for key in ("depth", "axial", "lateral", "z", "normal", "tangential")}
+    for row in rows:
+        out["depth"].append(-row["rigid_y"] - scene["peg"]["start_gap"])
+        out["axial"].append(-width * sum(row[f"contact_{zone}_Fy"] for zone in _zones(scene)))
+        out["lateral"].append(width * sum(abs(row[f"contact_{zone}_Fx"]) for zone in _zones(scene)))
+        centre = row["contact_B_y"]  # None (NaN in memory) without contact
+        z = (math.nan if centre is None else centre) - place.tip_y - row["rigid_y"]
+        out["z"].append(z)
+        alpha = float(nose.slope_angle(min(max(z, 0.0), nose.length))) if np.isfinite(z) else 0.0
+        force = width * np.array([row["contact_B_Fx"], row["contact_B_Fy"]])  # on spring B
+        out["normal"].append(float(force @ [math.cos(alpha), -math.sin(alpha)]))
+        out["tangential"].append(float(force @ [math.sin(alpha), math.cos(alpha)]))
+    return {key: np.array(value, float) for key, value in out.items()}
+
+
+def _ratio(f: dict, H: float) -> float:
+    on_nose = np.nan_to_num(f["z"], nan=np.inf) < (1 - NOSE_MARGIN) * H
+    loaded = f["lateral"] > RATIO_FLOOR * f["lateral"].max(initial=0.0)
+    chosen = on_nose & loaded & (f["lateral"] > 0)
+    return float(np.mean(f["axial"][chosen] / f["lateral"][chosen])) if chosen.any() else math.nan
+
+
+def snap_fit_metrics(simulation) -> dict:
+    from geometry.snap_fit import layout, nose_profile
+
+    scene, history = simulation.scene, simulation.history
+    spring, mu = scene["spring"], scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    nose, place = nose_profile(scene["peg"]), layout(scene)
+    insert = forces(scene, [row for row in history if row["step"] == "insert"])
+    withdraw = forces(scene, [row for row in history if row["step"] == "withdraw"])
+    out = {"insertion_depth": insert["depth"].tolist(), "insertion_force": insert["axial"].tolist(),
+           "lateral_force": insert["lateral"].tolist(), "withdrawal_depth": withdraw["depth"].tolist(),
+           "withdrawal_force": (-withdraw["axial"]).tolist(), "withdrawal_lateral_force": withdraw["lateral"].tolist()}
+    out["final_contact_force"] = float(insert["lateral"][-1] / spring["count"]) if len(insert["lateral"]) else 0.0
+    out["peak_insertion_force"] = float(insert["axial"].max(initial=0.0))
+    out["peak_withdrawal_force"] = float((-withdraw["axial"]).max(initial=0.0))
+    out["insertion_force_ratio"] = _ratio(insert, nose.length)
+    out["withdrawal_force_ratio"] = _ratio(withdraw, nose.length)
+    touching = (insert["normal"] > RATIO_FLOOR * max(insert["normal"].max(initial=0.0), 1e-300)) \
+        & (np.nan_to_num(insert["z"], nan=np.inf) < (1 - NOSE_MARGIN) * nose.length)
+    stuck = touching & (np.abs(insert["tangential"]) < (1 - STICK_MARGIN) * mu * insert["normal"])
+    out["jammed"] = bool(stuck.any())
+    out["stuck_increments"] = int(stuck.sum())
+    out["max_von_mises"] = max(row["max_von_mises"] for row in history)
+    out["yield_ratio"] = out["max_von_mises"] / scene["materials"]["spring"]["yield_stress"]
+    out["yielded"] = bool(out["yield_ratio"] > 1)
+    out["root_stress"] = root_stress(scene, history)
+    out["root_yield_ratio"] = out["root_stress"] / scene["materials"]["spring"]["yield_stress"]
+    out.update(reduced_model(scene))
+    if nose.kind == "taper":
+        alpha = math.radians(scene["peg"]["nose_angle"])
+        out["insertion_ratio_statics"] = float(reference.force_ratio(alpha, mu))
+        out["withdrawal_ratio_statics"] = float(reference.force_ratio(alpha, mu, withdrawal=True))
+    out["wall_time_s"] = float(sum(simulation.timings.values()))
+    return out
+
+
+def root_stress(scene: dict, rows: list[dict]) -> float:
+    """Largest beam stress (MPa) at the root of spring B over the rows: bending 6 |M| / h^2 plus
+    axial |N| / h, from the root's reactions per mm of width (the moment recorded about the origin
+    is moved to the root's centre)."""
+    from geometry.snap_fit import layout
+
+    h = scene["spring"]["thickness"]
+    centre = layout(scene).inner + h / 2
+    return float(max((6 * abs(row["reaction_root_B_Mz"] - centre * row["reaction_root_B_y"]) / h ** 2
+                      + abs(row["reaction_root_B_y"]) / h for row in rows), default=0.0))
+
+
+def reduced_model(scene: dict) -> dict:
+    """The rigid-arm model's predictions for the scene: stiffness, final force, peak insertion
+    force and jamming (femcontact.references.snap_fit)."""
+    from geometry.snap_fit import layout, nose_profile
+
+    spring, material = scene["spring"], scene["materials"]["spring"]
+    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    nose, place = nose_profile(scene["peg"]), layout(scene)
+    k = reference.cantilever_stiffness(material["E"], spring["thickness"], spring["length"], spring["width"])
+    couple = reference.coupling(spring)
+    depth = np.linspace(0.0, 1.1 * (nose.length - place.contact_depth), 400)  # the nose and onto the shank
+    lateral, axial = reference.rigid_arm_forces(nose, place.apex[0], k, mu, couple, depth)
+    z = place.contact_depth + depth
+    alpha = nose.slope_angle(np.minimum(z, nose.length * (1 - 1e-9)))
+    return {"stiffness_3EI_L3": k, "model_final_contact_force": float(lateral[-1]),
+            "model_peak_insertion_force": float(np.nanmax(axial)) * spring["count"] if np.isfinite(axial).any()
+            else math.inf,
+            "model_jammed": bool(reference.jams(alpha, mu, couple).any()),
+            "cone_jammed": bool(reference.jams_by_friction_cone(alpha, mu).any()),
+            "max_nose_angle_deg": float(np.degrees(alpha.max()))}

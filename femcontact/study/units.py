@@ -1,0 +1,139 @@
+"""Labels with units of the scene keys and metrics a report shows (one place for all of them).
+
+`label(name)` gives e.g. "depth l_d (mm)" for `peg.insertion_depth`; a step-end metric
+`STEP.QUANTITY` is labelled from its quantity ("tilt (deg), end of release"), `time.PHASE`
+in s, and a name not listed here is shown as is. `PRIMARY` lists the headline metrics of
+each family of scenes, the default columns of a report (docs/studies.md, "Reports").
+"""
+
+LABELS = {
+    # scene keys
+    "peg.insertion_depth": "depth l_d (mm)",
+    "peg.width": "peg width d (mm)",
+    "peg.length": "peg length (mm)",
+    "hole.width": "hole width D (mm)",
+    "hole.block_width": "block width (mm)",
+    "hole.depth": "block depth (mm)",
+    "contact.mu": "friction mu",
+    "contact.gamma": "Nitsche gamma",
+    "steps.0.force": "push (Fx, Fy) (N)",
+    "steps.0.moment": "couple Mz (N mm)",
+    "mesh.resolution": "mesh resolution",
+    "rcc.theta_l": "link tilt theta_L (deg)",
+    "rcc.peg_length": "peg length L (mm)",
+    "rcc.b": "base length b (mm)",
+    "rcc.offset_t": "base offset T (mm)",
+    "motion.translation": "test translation (mm)",
+    "motion.rotation": "test rotation (rad)",
+    # wedging metrics (femcontact.wedging)
+    "wedged": "wedged (simulated)",
+    "analytic_wedged": "wedged (l_crit <= l_d <= mu d)",
+    "wedge_reason": "why (not) wedged",
+    "residual_force_A": "residual R_A (N)",
+    "residual_force_B": "residual R_B (N)",
+    "residual_force_A_x": "residual R_A,x (N)",
+    "residual_force_A_y": "residual R_A,y (N)",
+    "residual_force_A_z": "residual R_A,z (N)",
+    "residual_force_B_x": "residual R_B,x (N)",
+    "residual_force_B_y": "residual R_B,y (N)",
+    "residual_force_B_z": "residual R_B,z (N)",
+    "residual_over_load": "R_A / load scale",
+    "load_scale": "load scale (N)",
+    "imbalance": "|R_A + R_B| / |R_A|",
+    "angle_A_deg": "R_A off contact line (deg)",
+    "angle_B_deg": "R_B off contact line (deg)",
+    "tilt_initial_deg": "tilt at placement (deg)",
+    "tilt_loaded_deg": "tilt under load (deg)",
+    "tilt_released_deg": "tilt after release (deg)",
+    "tilt_deg": "tilt (deg)",
+    "stabilization_force_released": "stabilisation after release (N)",
+    "elastic_energy": "elastic energy (N mm)",
+    "max_von_mises": "max von Mises (MPa)",
+    "yield_ratio": "max von Mises / yield",
+    "clearance_ratio": "clearance ratio (D - d) / D",
+    "l_crit": "l_crit (mm)",
+    "l_max": "l_max = mu d (mm)",
+    "depth_over_l_crit": "l_d / l_crit",
+    "depth_over_l_max": "l_d / (mu d)",
+    "boundary_distance": "distance to a bound / l_max",
+    "near_boundary": "near a bound",
+    "wall_time_s": "solver time (s)",
+    # contact outputs (femcontact.outputs), also as STEP.QUANTITY
+    "contact_A_force": "contact force A (N)",
+    "contact_B_force": "contact force B (N)",
+    "contact_top_force": "contact force (N)",
+    "max_pressure": "max contact pressure (MPa)",
+    "newton_iterations": "Newton iterations",
+    "increments": "increments",
+    "yielded": "yielded",
+    # rcc metrics (femcontact.rcc)
+    "max_rel_error": "largest relative error",
+    "worst_dof": "worst dof",
+    "motion_ratio": "translation / link length",
+    "centre_z": "compliance centre z (mm)",
+    "centre_z_moved": "compliance centre z, moved (mm)",
+    **{f"error_{dof}": f"relative error {dof}" for dof in ("x", "y", "z", "rx", "ry", "rz")},
+    # runner columns (femcontact.database)
+    "case_id": "case",
+    "status": "status",
+    "wall": "wall time (s)",
+    "dofs": "dofs",
+    "ranks": "ranks",
+    "reason": "reason",
+}
+
+# Headline metrics per family, picked by the first metric of the list a study's rows have.
+PRIMARY = {
+    "wedging": ["wedged", "analytic_wedged", "residual_force_A", "tilt_released_deg", "max_von_mises"],
+    "rcc": ["max_rel_error", "worst_dof", "centre_z", "centre_z_moved"],
+    "contact": ["max_von_mises", "newton_iterations"],
+}
+
+
+def label(name: str) -> str:
+    """Axis or column label of a scene key, metric or runner column, with its unit."""
+    if name in LABELS:
+        return LABELS[name]
+    if name.startswith("time."):
+        return f"time {name[5:]} (s)"
+    if name.startswith("metric."):
+        return label(name[7:])
+    step, _, quantity = name.rpartition(".")
+    if step and quantity in LABELS and not step[0].isdigit():
+        return f"{LABELS[quantity]}, end of {step}"
+    return name
+
+
+def primary_metrics(columns) -> list[str]:
+    """The headline metrics of the first family whose first primary metric is among `columns`."""
+    columns = list(columns)
+    for metrics in PRIMARY.values():
+        if metrics[0] in columns:
+            return [m for m in metrics if m in columns]
+    return []
+
+
+# Metrics stored as 0/1 that mean no/yes.
+FLAGS = {"wedged", "analytic_wedged", "near_boundary", "yielded"}
+
+
+def value_label(name: str, value) -> str:
+    """'hole width D = 40.05 mm' for hole.width = 40.05: a legend entry or a case description."""
+    text = label(name)
+    quantity, unit = text, ""
+    if text.endswith(")") and " (" in text:
+        quantity, unit = text[:-1].rsplit(" (", 1)
+    text = format_value(value)
+    return f"{quantity} = {text}" + (f" {unit}" if unit and text != "none" else "")
+
+
+def format_value(value) -> str:
+    """Numbers to 4 significant digits, lists as (a, b) (one item: a; none: 'none')."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, list):
+        inner = ", ".join(map(format_value, value))
+        return "none" if not value else inner if len(value) == 1 else f"({inner})"
+    return "" if value is None else str(value)

@@ -1,0 +1,30 @@
+"""The snap-fit metrics do not depend on the number of MPI ranks (run under mpirun -n 2): the
+contract scene (two springs) on both ranks against each rank alone on MPI.COMM_SELF, insertion
+only (the withdrawal stays on the shank) to keep the test short."""
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+from femcontact.config.scene import load_scene
+from femcontact.scenarios.snap_fit import snap_fit_metrics
+from femcontact.solver.stepping import Simulation
+
+SCENE = Path(__file__).parents[2] / "scenes" / "snap_fit_2d.toml"
+KEYS = ("insertion_force_ratio", "final_contact_force", "peak_insertion_force", "peak_withdrawal_force",
+        "root_stress")
+
+
+def run(comm) -> dict:
+    simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.6", "steps.0.increments=20",
+                                               "steps.1.increments=2", "steps.1.motion.y=-0.7"]), comm)
+    simulation.run()
+    return snap_fit_metrics(simulation)
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size != 2, reason="run with mpirun -n 2")
+def test_two_ranks_match_one_rank():
+    parallel, serial = run(MPI.COMM_WORLD), run(MPI.COMM_SELF)
+    for key in KEYS:  # forces ~1 N, solver tolerance 1e-5 N
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-5), key
+    assert parallel["jammed"] is serial["jammed"] is False
