@@ -89,3 +89,19 @@ def write_json_atomic(path, data) -> Path:
     """Write JSON atomically; NaN and infinities are written as null (strict JSON)."""
     text = json.dumps(finite_or_none(data), indent=1, sort_keys=True, default=float, allow_nan=False)
     return write_text_atomic(path, text + "\n")
+
+
+def remove_stale_compilations(directory: Path, older_than: float) -> None:
+    """Delete JIT sources (and their ready marks) of FFCx's cache `directory` whose compiled
+    module is missing and that are older than `older_than` seconds: a process killed while
+    compiling leaves them, and every later run would wait for that compilation and time out."""
+    import time
+
+    for source in Path(directory).glob("*.c"):
+        try:
+            stale = time.time() - source.stat().st_mtime >= older_than
+        except FileNotFoundError:
+            continue
+        if stale and not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
+            source.unlink(missing_ok=True)
+            source.with_suffix(".c.cached").unlink(missing_ok=True)

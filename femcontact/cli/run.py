@@ -11,6 +11,7 @@ output directory that cannot be written (one message naming it).
 """
 import json
 import math
+import os
 import sys
 import time
 import traceback
@@ -18,7 +19,9 @@ from pathlib import Path
 
 from femcontact.config.scene import case_id, load_scene
 from femcontact.errors import InputError
-from femcontact.io import WriteError, describe, make_dir, write_json_atomic
+from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic
+
+STALE_COMPILATION_AGE = 600.0  # s; a form compiles in well under a minute
 
 
 def add_arguments(parser):
@@ -61,6 +64,8 @@ def command(args) -> int:
 
     comm = MPI.COMM_WORLD
     check_restart(scene, args.checkpoint, args.restart, comm.size)
+    if comm.rank == 0:  # a compilation unfinished for 10 minutes was killed: FFCx would wait for it forever
+        remove_stale_compilations(jit_cache(), older_than=STALE_COMPILATION_AGE)
     case_dir = Path(args.out or Path("results", "run", case_id(scene)))
     problem = None
     if comm.rank == 0:
@@ -96,6 +101,11 @@ def command(args) -> int:
         if not args.quiet:
             print_summary(result, case_dir)
     return 0 if result["status"] == "ok" else 1
+
+
+def jit_cache() -> Path:
+    """FFCx's JIT cache directory ($XDG_CACHE_HOME/fenics, default ~/.cache/fenics)."""
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"), "fenics")
 
 
 def print_summary(result: dict, case_dir: Path) -> None:

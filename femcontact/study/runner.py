@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.io import WriteError, describe, make_dir, write_json_atomic, write_text_atomic
+from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.config.scene import case_id, read_toml, resolve
 
@@ -354,14 +354,11 @@ def femcontact_command() -> list[str]:
 
 
 def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Delete JIT sources (and their ready marks) whose compiled module is missing: a case killed
-    while compiling leaves them, and FFCx then waits for that compilation until its timeout. Safe
-    here: the runner holds the study lock and its job slots' caches are its own (a SLURM
-    task cleans only the slot it holds)."""
-    for source in cache_root.glob(f"{slots}/fenics/*.c"):
-        if not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
-            source.unlink(missing_ok=True)
-            source.with_suffix(".c.cached").unlink(missing_ok=True)  # its 'ready' mark, if any
+    """Clean the job slots' JIT caches (see femcontact.io.remove_stale_compilations). Safe at
+    any age here: the runner holds the study lock and its job slots' caches are its own (a
+    SLURM task cleans only the slot it holds)."""
+    for directory in cache_root.glob(f"{slots}/fenics"):
+        remove_stale_compilations(directory, older_than=0.0)
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
