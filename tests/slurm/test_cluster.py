@@ -21,6 +21,7 @@ import pytest
 from femcontact.cli import main
 from femcontact.study.slurm import active_tasks, read_submissions
 from femcontact.study.runner import load_study
+from block_scene import BLOCK_SCENE
 
 REPO = Path(__file__).resolve().parents[2]
 FAKE_CASE = REPO / "tests" / "support" / "fake_case.py"
@@ -38,18 +39,7 @@ grid = {{ "rcc.theta_l" = [60, 70, 80] }}
 zip = {{ "motion.translation" = [0.1, 1.0], "motion.rotation" = [0.005, 0.05] }}
 """
 
-FAKE_BASE = """kind = "contact"
-dim = 2
-geometry = "block"
-[contact]
-mu = 0.2
-[[steps]]
-name = "press"
-force = [0.0, -100.0]
-[[steps]]
-name = "pull"
-force = [10.0, -100.0]
-"""
+FAKE_BASE = BLOCK_SCENE
 
 
 @pytest.fixture(autouse=True)

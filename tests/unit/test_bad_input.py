@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from femcontact.cli import main
+from block_scene import BLOCK_SCENE
 
 HERE = Path(__file__).parent
 SUPPORT = HERE.parent / "support"
@@ -26,15 +27,7 @@ SCENES = HERE.parents[1] / "scenes"
 WEDGING = str(SCENES / "wedging_2d.toml")
 RCC = str(SCENES / "rcc.toml")
 FAKE = f"{sys.executable} {SUPPORT / 'fake_case.py'}"
-BLOCK = """kind = "contact"
-dim = 2
-geometry = "block"
-[contact]
-mu = 0.2
-[[steps]]
-name = "press"
-force = [0.0, -100.0]
-"""
+BLOCK = BLOCK_SCENE
 
 
 def cli(capsys, *argv) -> tuple[int, str]:

@@ -26,25 +26,14 @@ from femcontact.errors import InputError
 from femcontact.config.scene import case_id, resolve
 from femcontact.config.schema import set_key
 from femcontact.study.runner import expand, load_study, to_toml
+from block_scene import BLOCK_SCENE
 
 HERE = Path(__file__).parent
 SUPPORT = HERE.parent / "support"
 FAKE = f"{sys.executable} {SUPPORT / 'fake_case.py'}"
 PNG = b"\x89PNG\r\n\x1a\n"
 
-BASE = """
-kind = "contact"
-dim = 2
-geometry = "block"
-[contact]
-mu = 0.2
-[[steps]]
-name = "press"
-force = [0.0, -100.0]
-[[steps]]
-name = "pull"
-force = [10.0, -100.0]
-"""
+BASE = BLOCK_SCENE
 
 
 def make_study(tmp_path, body: str, name="demo", launcher=FAKE + " -n {ranks}", settings="") -> Path:
