@@ -77,9 +77,14 @@ def write_force_curves(spec: dict, rows: list[dict], results: Path, column) -> P
         axes.set_xlim(right=1.25 * max(ends))
     axes.set(xlabel=f"{spec['x']} (mm)", ylabel=f"{spec['y']} (N)", title=spec["title"] or f"{spec['y']} against depth")
     axes.title.set_fontsize(9)
+    return _save(plt, figure, axes, results, spec, f"{spec['y']}_curves", legend_size=7)
+
+
+def _save(plt, figure, axes, results: Path, spec: dict, default_name: str, legend_size: int = 8) -> Path:
+    """Grid, legend, then the PNG (the spec's file name, or a name made from `default_name`)."""
     axes.grid(True, alpha=0.3)
-    axes.legend(fontsize=7)
-    path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{spec['y']}_curves") + ".png")
+    axes.legend(fontsize=legend_size)
+    path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", default_name) + ".png")
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
@@ -96,12 +101,7 @@ def write_sweep(spec: dict, rows: list[dict], results: Path, column) -> Path:
         axes.plot(x, model, "k--", label="rigid-arm model")
     axes.set(xlabel=spec["x"], ylabel=spec["y"], title=spec["title"] or f"{spec['y']} against {spec['x']}",
              xscale="log" if spec["logx"] else "linear", yscale="log" if spec["logy"] else "linear")
-    axes.grid(True, alpha=0.3)
-    axes.legend(fontsize=8)
-    path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"{spec['y']}_vs_{spec['x']}") + ".png")
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return _save(plt, figure, axes, results, spec, f"{spec['y']}_vs_{spec['x']}")
 
 
 def write_jam_map(spec: dict, rows: list[dict], results: Path, column) -> Path:
