@@ -222,3 +222,35 @@ def test_continuous_pull_dislodges_just_above_the_quasi_static_pullout(wedged_pe
     force = 1.02 * pullout
     assert above["impulse_Ns"] == pytest.approx(force * above["dislodge_time_s"], rel=1e-9)
     assert above["impulse_frames_Ns"] == pytest.approx(force * 0.005, rel=1e-9)
+
+
+def test_hard_pulls_end_at_an_event_with_an_exact_impulse(wedged_peg):
+    """Hard cases: 1 kHz triangle pulses (a 1 ms period, 20x finer than the thesis' 50 Hz) at
+    twice the pull-out force dislodge within the pull step, their impulse the integral of the
+    pulses up to the event; a pull of 50x the pull-out throws the peg out at once, and nothing
+    is integrated past the event (the peg has risen less than the 0.5 mm event rise)."""
+    pullout = wedged_peg.pullout["quasi_static_pullout_N"]
+    fast = wedged_peg.pull(2.0 * pullout, "pulse", 1000.0)
+    assert fast["dislodged"] and 0 < fast["dislodge_time_s"] < 0.1
+    periods, phase = divmod(fast["dislodge_time_s"] * 1000.0, 1.0)  # triangle: area F/2 per period
+    force = 2.0 * pullout
+    partial = force * (phase ** 2 if phase < 0.5 else 0.5 - (1 - phase) ** 2) / 1000.0
+    assert fast["impulse_Ns"] == pytest.approx(force / 2 / 1000.0 * periods + partial, rel=1e-6)
+    flying = wedged_peg.pull(50.0 * pullout, "continuous")
+    assert flying["dislodged"] and flying["dislodge_time_s"] < fast["dislodge_time_s"] + 1e-3
+    assert 0 < flying["rise_at_end_mm"] <= 0.5 + 1e-9
+
+
+def test_a_high_friction_peg_holds_below_and_leaves_above_its_own_pullout():
+    """mu = 0.5 (l_max = 25 mm, deep inside the wedging band): the continuous pull still
+    separates at the quasi-static pull-out force: 2 % under holds, 2 % over leaves."""
+    from femcontact.config.scene import load_scene
+    from femcontact.scenarios.dislodging import Puller
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
+                       ["mesh.resolution=0.5", "dislodging.tolerance=0.02", "contact.mu=0.5"])
+    peg = Puller(scene)
+    pullout = peg.pullout["quasi_static_pullout_N"]
+    assert pullout > 0
+    assert not peg.pull(0.98 * pullout, "continuous")["dislodged"]
+    assert peg.pull(1.02 * pullout, "continuous")["dislodged"]
