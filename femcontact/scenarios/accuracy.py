@@ -24,9 +24,10 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+from femcontact.config.presets import PRESETS
 
 ROOT = Path(__file__).resolve().parents[2]
+PRESET_NAMES = ("fast", "balanced", "accurate")
 OUT = Path("results/accuracy")
 LAUNCH_ENV = dict(os.environ)
 """The environment before this process initialises MPI: an `mpirun` started with the variables
@@ -64,22 +65,24 @@ def hertz_rows() -> list[dict]:
     rows += [hertz_case(f"P2 level {level}", "degree P2", size(level), degree=2) for level in range(4)]
     rows += [hertz_case(f"gamma {gamma:g}, level 2", "Nitsche gamma", size(2), gamma=gamma) for gamma in (1.0, 100.0)]
     rows += [hertz_case(f"rtol {rtol:g}, level 2", "Newton rtol", size(2), rtol=rtol) for rtol in (1e-6, 1e-11)]
-    rows += [hertz_case(f"preset {name}", "preset", size(1), resolution=resolution)
-             for name, resolution in (("fast", 0.5), ("balanced", 1.0), ("accurate", 2.0))]
+    rows += [hertz_case(f"preset {name}", "preset", size(1), resolution=PRESETS[name]["mesh"]["resolution"],
+                        rtol=PRESETS[name]["solver"]["rtol"]) for name in PRESET_NAMES]
     return rows
 
 
-def wedging_case(resolution: float, label: str, knob: str, overrides=()) -> dict:
+def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) -> dict:
+    """One wedging run; `resolution` None leaves the mesh to the scene (and its preset)."""
     from femcontact.config.scene import load_scene
     from femcontact.scenarios.wedging import wedge_metrics
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
-    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", [f"mesh.resolution={resolution}", *overrides])
+    mesh = [] if resolution is None else [f"mesh.resolution={resolution}"]
+    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", [*mesh, *overrides])
     simulation = Simulation(scene)
     simulation.run()
     metrics = wedge_metrics(simulation)
-    return {"problem": "wedging_2d", "knob": knob, "setting": label, "resolution": resolution,
+    return {"problem": "wedging_2d", "knob": knob, "setting": label, "resolution": scene["mesh"]["resolution"],
             "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
             "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
             "residual_force_A": metrics["residual_force_A"], "tilt_released_deg": metrics["tilt_released_deg"]}
@@ -98,8 +101,7 @@ def wedging_rows() -> tuple[list[dict], dict]:
     wedging_case(0.35, "warm-up", "")
     resolutions = (0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8)
     rows = [wedging_case(r, f"resolution {r:g}", "mesh (P1)") for r in resolutions]
-    rows += [wedging_case(r, f"preset {name}", "preset", [f"accuracy={name}"])
-             for name, r in (("fast", 0.5), ("balanced", 1.0), ("accurate", 2.0))]
+    rows += [wedging_case(None, f"preset {name}", "preset", [f"accuracy={name}"]) for name in PRESET_NAMES]
     finest = rows[len(resolutions) - 3: len(resolutions)]
     reference = {}
     for key in ("residual_force_A", "tilt_released_deg"):

@@ -104,7 +104,8 @@ def report(studies: list[tuple[str, list]]) -> tuple[str, int]:
             path = case_dir / "result.json"
             results[case_dir.name] = (scene, json.loads(path.read_text()) if path.exists() else None)
         ok = [r for _, r in results.values() if r and r["status"] == "ok"]
-        found = [(cid, check(r)) for cid, (_, r) in results.items() if check(r)]
+        checked = {cid: check(r) for cid, (_, r) in results.items()}
+        found = [(cid, defect) for cid, defect in checked.items() if defect]
         defects += len(found)
         lines += [f"## {name}: {len(ok)} of {len(results)} converged ({100 * len(ok) / max(len(results), 1):.0f} %), "
                   f"{len(found)} defects (NaN, traceback, unstructured failure, no result)", ""]
