@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(basename $(notdir $(STUDY_FILES)))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean dislodging_beyond $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -104,3 +104,10 @@ stability: setup
 
 clean:
 	rm -rf results
+
+# Beyond the thesis' dislodging (issue 14): the 2-D and 3-D studies, then results/dislodging_beyond/
+dislodging_beyond: setup
+	@status=0; for study in dislodging_beyond_2d dislodging_beyond_3d; do \
+	  $(FEMCONTACT) study studies/$$study.toml $(STUDY_FLAGS) || status=$$?; \
+	  if [ $$status -gt 1 ]; then exit $$status; fi; done; \
+	  $(PY) -m femcontact.study.dislodging_beyond || exit $$?; exit $$status

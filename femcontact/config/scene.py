@@ -373,8 +373,11 @@ def resolve(data: dict, overrides=()) -> dict:
         return scene
     if kind == "dislodging":
         return _resolve_dislodging(data)
+    if kind == "dislodging_beyond":
+        return _resolve_dislodging_beyond(data)
     if kind != "contact":
-        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc', 'dislodging'")
+        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc', 'dislodging', "
+                         "'dislodging_beyond'")
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
                     {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
     if isinstance(data.get("accuracy"), str):
@@ -397,6 +400,24 @@ def _resolve_dislodging(data: dict) -> dict:
     scene["dislodging"] = validate(table, dislodging.DISLODGING, "dislodging.")
     scene["kind"] = "dislodging"
     dislodging.check(scene)
+    return scene
+
+
+def _resolve_dislodging_beyond(data: dict) -> dict:
+    """A dislodging_beyond scene (issue 14): a 2-D or 3-D peg-in-hole contact scene plus its
+    [dislodging] table (config/dislodging_beyond.py)."""
+    from femcontact.config import dislodging_beyond
+
+    data = dict(data)
+    table = data.pop("dislodging", {})
+    if not isinstance(table, dict):
+        raise InputError(f"dislodging = {table!r}: expected a table")
+    head = validate({k: data[k] for k in ("dim",) if k in data}, {"dim": contact_schema(2, "peg_in_hole")["dim"]})
+    scene = validate({**data, "kind": "contact"}, contact_schema(head["dim"], "peg_in_hole"))
+    _check_contact(scene)
+    scene["dislodging"] = validate(table, dislodging_beyond.BEYOND, "dislodging.")
+    scene["kind"] = "dislodging_beyond"
+    dislodging_beyond.check(scene)
     return scene
 
 

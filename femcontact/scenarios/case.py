@@ -86,6 +86,10 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
         from femcontact.rcc.device import run_case as run_rcc
 
         return run_rcc(scene)
+    if scene["kind"] == "dislodging_beyond":
+        from femcontact.scenarios.dislodging_beyond import run_case as run_beyond
+
+        return run_beyond(scene, case_dir, checkpoint, restart)
     if scene["kind"] == "dislodging":
         from femcontact.scenarios.dislodging import run_case as run_dislodging
 

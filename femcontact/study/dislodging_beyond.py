@@ -1,0 +1,246 @@
+"""results/dislodging_beyond/ from the studies dislodging_beyond_2d and dislodging_beyond_3d
+(issue 14; docs/dislodging_beyond.md): degree_of_wedging.csv, methods.csv, optimum.json,
+optimum.csv (every pull of the optimisation), pullout_3d.csv, the plots and summary.md with the
+ranking of the ways out by impulse and by peak force.
+
+    python -m femcontact.study.dislodging_beyond [--results results]
+"""
+import argparse
+import csv
+import json
+import math
+from pathlib import Path
+
+STUDIES = Path(__file__).resolve().parents[2] / "studies"
+DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
+                  "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
+                  "degree_of_wedging", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",
+                  "one_dof_first_slip_N", "one_dof_full_slide_N"]
+METHOD_COLUMNS = ["method", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
+                  "dislodge_time_at_threshold_s", "quasi_static_pullout_N", "pulls", "loads"]
+LOADS = {"continuous": "constant vertical pull at the peg top",
+         "pulse": "vertical triangle pulses, 50 Hz",
+         "shake": "lateral triangle pulses at the peg top, 50 Hz, against the wedging moment",
+         "twist": "moment triangle pulses, 50 Hz, against the wedging moment; F = M / d (d = 50 mm)",
+         "pull_shake": "constant vertical pull 0.5 x pull-out + lateral triangle pulses, 50 Hz; F = |(F_lat, F_pull)|"}
+
+
+def _read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as stream:
+        return list(csv.DictReader(stream))
+
+
+def _write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
+    with open(path, "w", newline="") as stream:
+        writer = csv.DictWriter(stream, fieldnames=columns, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _cases(name: str, root: Path) -> list[tuple]:
+    """(case, metrics) of the study's cases that finished ok."""
+    from femcontact.study.runner import load_study, read_result
+
+    study = load_study(STUDIES / f"{name}.toml", results_root=root)
+    out = []
+    for case in study.cases:
+        result = read_result(case.dir)
+        if result and result["status"] == "ok":
+            out.append((case, result["metrics"]))
+    return out
+
+
+def degree_rows(cases) -> list[dict]:
+    rows = []
+    for case, m in cases:
+        if case.scene["dislodging"]["task"] != "wedge":
+            continue
+        sc = case.scene
+        rows.append({"peg.width": sc["peg"]["width"], "hole.width": sc["hole"]["width"],
+                     "clearance_mm": round(sc["hole"]["width"] - sc["peg"]["width"], 6),
+                     "peg.insertion_depth": sc["peg"]["insertion_depth"], "contact.mu": sc["contact"]["mu"],
+                     "wedging_moment_Nmm": sc["steps"][0]["moment"][0],
+                     **{k: m[k] for k in ("wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg",
+                                          "degree_of_wedging", "degree_of_wedging_rotation_held",
+                                          "one_dof_first_slip_N", "one_dof_full_slide_N")},
+                     "pullout_force_N": m["quasi_static_pullout_N"],
+                     "pullout_rotation_held_N": m["quasi_static_pullout_N_rotation_held"]})
+    return rows
+
+
+def method_rows(cases) -> tuple[list[dict], list[dict]]:
+    """methods.csv rows and every pull of the bisections (with its method)."""
+    rows, pulls = [], []
+    for case, m in cases:
+        s = case.scene["dislodging"]
+        if s["task"] != "threshold" or "threshold_force_N" not in m:
+            continue
+        rows.append({"method": s["method"], "threshold_over_pullout": m["threshold_force_N"] / m["quasi_static_pullout_N"],
+                     "loads": LOADS[s["method"]], **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
+        if (case.dir / "pulls.csv").exists():
+            pulls += _read_csv(case.dir / "pulls.csv")
+    order = list(LOADS)
+    return sorted(rows, key=lambda r: order.index(r["method"])), pulls
+
+
+def optimum_of(cases) -> tuple[dict | None, list[dict]]:
+    for case, m in cases:
+        if case.scene["dislodging"]["task"] == "optimise" and (case.dir / "optimum.json").exists():
+            return json.loads((case.dir / "optimum.json").read_text()), _read_csv(case.dir / "pulls.csv")
+    return None, []
+
+
+def rows_3d(cases, degrees) -> list[dict]:
+    """The 3-D thresholds with their 2-D estimates: the 1-DOF first slip of the 3-D contact forces,
+    and the 2-D twin's degree of wedging times mu (N_A + N_B) of the 3-D wedge."""
+    twin = [r for r in degrees if r["peg.width"] == 40.0 and r["clearance_mm"] == 0.1]
+    out = []
+    for case, m in cases:
+        mu = case.scene["contact"]["mu"]
+        row = {"method": case.scene["dislodging"]["method"], **{k: v for k, v in m.items() if not k.endswith("_s")}}
+        if row["method"] == "continuous":
+            row["estimate_2d_one_dof_first_slip_N"] = m["one_dof_first_slip_N"]
+            if twin:
+                row["degree_of_wedging_2d_twin"] = twin[0]["degree_of_wedging"]
+                row["estimate_2d_twin_degree_N"] = twin[0]["degree_of_wedging"] * mu * m["sum_normal_N"]
+                row["threshold_over_2d_twin_estimate"] = m["threshold_force_N"] / row["estimate_2d_twin_degree_N"]
+        row["wall_time_s"] = m.get("pullout_time_s", "")
+        out.append(row)
+    return out
+
+
+def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = []
+    if degrees:
+        base = {"peg.width": 50.0, "clearance_mm": 0.05, "peg.insertion_depth": 7.0, "contact.mu": 0.2,
+                "wedging_moment_Nmm": 1000.0}
+        fig, axes = plt.subplots(1, 4, figsize=(15, 3.8), sharey=True)
+        for ax, key in zip(axes, ("peg.insertion_depth", "clearance_mm", "contact.mu", "wedging_moment_Nmm")):
+            rows = sorted([r for r in degrees if all(r[k] == v for k, v in base.items() if k != key)], key=lambda r: r[key])
+            ax.plot([r[key] for r in rows], [r["degree_of_wedging"] for r in rows], "o-", label="free peg")
+            ax.plot([r[key] for r in rows], [r["degree_of_wedging_rotation_held"] for r in rows], "s--",
+                    label="rotation held")
+            ax.set_xlabel(key)
+            ax.grid(True, alpha=0.3)
+        axes[0].set_ylabel("pull-out / (mu (N_A + N_B))")
+        axes[0].legend(fontsize=8)
+        fig.suptitle("Degree of wedging (2-D, thesis case 1 base, one key changed at a time)")
+        fig.tight_layout()
+        paths.append(out / "degree_of_wedging.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    if pulls:
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        for k, method in enumerate(LOADS):
+            rows = sorted([r for r in pulls if r["method"] == method and r["dislodged"] == "True"],
+                          key=lambda r: float(r["peak_force_N"]))
+            if rows:
+                ax.plot([float(r["peak_force_N"]) for r in rows], [float(r["impulse_Ns"]) for r in rows], "o-",
+                        ms=3, color=f"C{k}", label=method)
+        ax.set_xlabel("peak force (N; twist M / d)")
+        ax.set_ylabel("impulse to dislodge (N s)")
+        ax.set_yscale("log")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        ax.set_title("Impulse against peak force: the dislodging pulls of each bisection")
+        fig.tight_layout()
+        paths.append(out / "impulse_vs_peak_force.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    if trials:
+        import numpy as np
+
+        grid = [r for r in trials if r["phase"] == "grid"]
+        shapes = list(dict.fromkeys(r["shape"] for r in grid))
+        fig, axes = plt.subplots(1, len(shapes), figsize=(5 * len(shapes), 4), squeeze=False)
+        hz = sorted({float(r["pulse_hz"]) for r in grid})
+        duty = sorted({float(r["duty"]) for r in grid})
+        for ax, shape in zip(axes[0], shapes):
+            table = np.full((len(duty), len(hz)), np.nan)
+            for r in grid:
+                if r["shape"] == shape:
+                    table[duty.index(float(r["duty"])), hz.index(float(r["pulse_hz"]))] = float(r["objective_Ns"])
+            image = ax.imshow(table, origin="lower", aspect="auto", cmap="viridis")
+            ax.set_xticks(range(len(hz)), [f"{h:g}" for h in hz])
+            ax.set_yticks(range(len(duty)), [f"{d:g}" for d in duty])
+            for i in range(len(duty)):
+                for j in range(len(hz)):
+                    ax.text(j, i, f"{table[i, j]:.2e}", ha="center", va="center", fontsize=7, color="w")
+            ax.set_xlabel("pulse frequency (Hz)")
+            ax.set_ylabel("duty")
+            ax.set_title(f"{shape}: impulse to dislodge (N s)")
+            fig.colorbar(image, ax=ax)
+            nm = [r for r in trials if r["phase"] == "nelder-mead" and r["shape"] == shape]
+            ax.plot([np.interp(float(r["pulse_hz"]), hz, range(len(hz))) for r in nm],
+                    [np.interp(float(r["duty"]), duty, range(len(duty))) for r in nm], "r.", ms=4)
+        fig.suptitle(f"Objective over frequency and duty at the grid's peak force; red: Nelder-Mead pulls "
+                     f"(their own peak force); optimum {optimum['shape']} {optimum['pulse_hz']:.3g} Hz, duty "
+                     f"{optimum['duty']:.3g}, {optimum['peak_force_N']:.3g} N" if optimum else "", fontsize=9)
+        fig.tight_layout()
+        paths.append(out / "objective_frequency_duty.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths
+
+
+def _table(rows: list[dict], columns: list[str]) -> list[str]:
+    def cell(v):
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+    return (["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+            + ["| " + " | ".join(cell(r.get(c, "")) for c in columns) + " |" for r in rows])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--results", default="results", help="results root of the two studies")
+    args = parser.parse_args(argv)
+    root = Path(args.results)
+    out = root / "dislodging_beyond"
+    out.mkdir(parents=True, exist_ok=True)
+    cases_2d, cases_3d = _cases("dislodging_beyond_2d", root), _cases("dislodging_beyond_3d", root)
+    degrees = degree_rows(cases_2d)
+    methods, pulls = method_rows(cases_2d)
+    optimum, trials = optimum_of(cases_2d)
+    three = rows_3d(cases_3d, degrees)
+    _write_csv(out / "degree_of_wedging.csv", degrees, DEGREE_COLUMNS)
+    _write_csv(out / "methods.csv", methods, METHOD_COLUMNS)
+    if optimum:
+        (out / "optimum.json").write_text(json.dumps(optimum, indent=2) + "\n")
+        _write_csv(out / "optimum.csv", trials, list(trials[0]) if trials else [])
+    if three:
+        columns = list(dict.fromkeys(k for r in three for k in r))
+        _write_csv(out / "pullout_3d.csv", three, columns)
+    paths = plots(out, degrees, methods, pulls, optimum, trials)
+    lines = ["# Beyond the thesis' dislodging (issue 14)", "",
+             "Generated by `python -m femcontact.study.dislodging_beyond`; see docs/dislodging_beyond.md.", "",
+             "## Degree of wedging (2-D)", ""]
+    lines += _table(degrees, ["peg.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
+                              "wedged_N_A", "wedged_N_B", "pullout_force_N", "degree_of_wedging",
+                              "degree_of_wedging_rotation_held"])
+    lines += ["", "## Ways out (2-D, thesis case 1, coarse)", ""]
+    lines += _table(methods, METHOD_COLUMNS[:-1])
+    for key, label in (("impulse_at_threshold_Ns", "impulse at the threshold"), ("threshold_force_N", "peak force")):
+        ranked = sorted(methods, key=lambda r: float(r[key]))
+        lines += ["", f"Ranking by {label} (least first): " + ", ".join(f"{r['method']} ({float(r[key]):.4g})"
+                                                                           for r in ranked)]
+    if optimum:
+        lines += ["", "## Optimal pulse", ""] + _table([optimum], list(optimum))
+    if three:
+        lines += ["", "## 3-D (quasi-static, 2 ranks)", ""] + _table(three, [c for c in (
+            "method", "threshold_force_N", "threshold_moment_Nmm", "sum_normal_N", "degree_of_wedging",
+            "estimate_2d_one_dof_first_slip_N", "estimate_2d_twin_degree_N", "threshold_over_2d_twin_estimate",
+            "twist_over_friction_torque") if any(c in r for r in three)])
+    lines += ["", "Plots: " + ", ".join(p.name for p in paths)]
+    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    print(f"dislodging_beyond: {len(degrees)} wedged states, {len(methods)} methods, "
+          f"optimum {'yes' if optimum else 'no'}, {len(three)} 3-D rows -> {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
