@@ -29,10 +29,10 @@ BEYOND = {
     "magnitude_range": Field("floats", [1.05, 8.0], "task 'optimise': peak forces searched, in multiples of "
                              "the quasi-static pull-out force", length=2),
     "grid_hz": Field("floats", [10.0, 50.0, 200.0], "task 'optimise': frequencies of the objective grid (Hz)"),
-    "grid_duty": Field("floats", [0.25, 0.5, 1.0], "task 'optimise': duties of the objective grid"),
+    "grid_duty": Field("floats", [0.5, 1.0], "task 'optimise': duties of the objective grid"),
     "grid_magnitude": Field("float", 2.0, "task 'optimise': peak force of the grid, in multiples of the pull-out",
                             positive=True),
-    "evaluations": Field("int", 12, "task 'optimise': Nelder-Mead evaluations per shape after the grid", min=1),
+    "evaluations": Field("int", 8, "task 'optimise': Nelder-Mead evaluations per shape after the grid", min=1),
     "lift": Field("float", 1e-3, "quasi-static pull-out: the wedge holds while the peg lifts less than this (mm)",
                   positive=True),
 }

@@ -33,6 +33,9 @@ from femcontact.scenarios.dislodging import OBSERVE_STEP, PULL_STEP, PULLOUT_FIL
 from femcontact.solver.loading import Schedule
 
 SHAPES = ("triangle", "square", "haversine")
+RETRIES = 2
+"""A pull whose Newton iteration fails (seen while locating the opening of a twisted peg: the rigid
+step swung back and forth) is run again from the wedged state with dt_max and the rise cap / 4."""
 
 
 # -- loads ---------------------------------------------------------------------------------------
@@ -135,18 +138,26 @@ class BeyondPuller(Puller):
         """One dynamic pull from the wedged state; its row."""
         from femcontact.scenarios.dynamics import Event
 
+        from femcontact.solver.newton import NewtonFailure
+
         s, sim = self.settings, self.simulation
-        sim.resume(self.wedged)
-        loads = self.set_loads(method, magnitude, frequency, duty, shape)
         start = time.perf_counter()
-        outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
-                                s["max_rise_per_increment"],
-                                settle_period=1 / frequency if method != "continuous" else 0.01)
+        for retry in range(RETRIES + 1):  # a Newton failure while locating the event: again with finer steps
+            sim.resume(self.wedged)
+            loads = self.set_loads(method, magnitude, frequency, duty, shape)
+            try:
+                outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"] / 4 ** retry,
+                                        s["dt_min"], s["max_rise_per_increment"] / 4 ** retry,
+                                        settle_period=1 / frequency if method != "continuous" else 0.01)
+                break
+            except (NewtonFailure, RuntimeError, FloatingPointError):
+                if retry == RETRIES:
+                    raise
         row = {"case": s["case"], "method": method, "magnitude_N": float(magnitude),
                "pulse_hz": frequency if method != "continuous" else "", "duty": duty if method != "continuous" else "",
                "shape": shape if method != "continuous" else "", "dislodged": outcome.event is not None,
                "event": outcome.event or "", "dislodge_time_s": "", "increments": outcome.increments,
-               "newton_iterations": outcome.newton_iterations, "settled": outcome.settled,
+               "newton_iterations": outcome.newton_iterations, "settled": outcome.settled, "retries": retry,
                "wall_s": time.perf_counter() - start}
         duration = sim.scene["steps"][PULL_STEP]["duration"]
         elapsed = outcome.time - float(sim.schedule.start_times[PULL_STEP]) if outcome.event else duration
@@ -378,7 +389,7 @@ def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
 
 PULL_COLUMNS = ["case", "method", "phase", "magnitude_N", "peak_force_N", "pulse_hz", "duty", "shape", "dislodged",
                 "event", "dislodge_time_s", "impulse_Ns", "applied_impulse_Ns", "objective_Ns", "increments",
-                "newton_iterations", "settled", "wall_s"]
+                "newton_iterations", "settled", "retries", "wall_s"]
 
 
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
