@@ -41,13 +41,14 @@ BEYOND = {
 def check(scene: dict) -> None:
     """The checks beyond a contact scene's (InputError naming the key)."""
     s, problems = scene["dislodging"], []
-    three_d = s["task"] == "pullout_3d"
+    three_d = scene["dim"] == 3
     if scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg":
         problems.append("geometry, rigid: a dislodging scene is peg_in_hole with the peg rigid")
-    if three_d and scene["dim"] != 3:
-        problems.append(f"dislodging.task = 'pullout_3d': dim = {scene['dim']}, expected 3")
-    if not three_d and scene["dim"] != 2:
-        problems.append(f"dislodging.task = {s['task']!r}: dim = {scene['dim']}, expected 2 (or task 'pullout_3d')")
+    if three_d and s["task"] not in ("wedge", "pullout_3d"):
+        problems.append(f"dislodging.task = {s['task']!r}: a 3-D scene (dim = 3) runs 'pullout_3d' (or 'wedge', "
+                        "its wedging prefix)")
+    if not three_d and s["task"] == "pullout_3d":
+        problems.append("dislodging.task = 'pullout_3d': dim = 2, expected 3")
     if not three_d and ("inertia" not in scene["effects"] or "friction" not in scene["effects"]):
         problems.append(f"effects = {scene['effects']}: a 2-D dislodging scene needs 'friction' and 'inertia'")
     if "friction" not in scene["effects"]:
@@ -55,7 +56,7 @@ def check(scene: dict) -> None:
     if len(scene["steps"]) not in (2, 4):
         problems.append(f"steps: {len(scene['steps'])} given, expected 4 (wedge, release, pull, observe) "
                         "or 2 (the wedging prefix)")
-    if three_d and s["method"] not in ("continuous", "twist"):
+    if s["task"] == "pullout_3d" and s["method"] not in ("continuous", "twist"):
         problems.append(f"dislodging.method = {s['method']!r}: task 'pullout_3d' pulls ('continuous') or twists "
                         "('twist') about the peg axis")
     for key in ("frequency_range", "duty_range", "magnitude_range"):

@@ -396,7 +396,7 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
     """One study case of kind dislodging_beyond (see the module docstring)."""
     from mpi4py import MPI
 
-    if scene["dislodging"]["task"] == "pullout_3d":
+    if scene["dim"] == 3:  # task 'pullout_3d', or its wedging prefix
         return run_3d(scene, case_dir, checkpoint, restart)
     case_dir, s, mu = Path(case_dir), scene["dislodging"], scene["contact"]["mu"]
     start = time.perf_counter()
