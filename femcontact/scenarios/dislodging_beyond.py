@@ -335,11 +335,14 @@ class Wedge3D:
         return bool(np.all(sim.zone_forces() > 0) and abs(moved) < s["lift"])
 
     def threshold(self, method: str, high: float) -> dict:
-        """Largest magnitude the wedge holds, by bisection between 0 and `high` (which must fail)."""
+        """Largest magnitude the wedge holds, by bisection from [0, high] (high doubled until the
+        wedge lets go, at most 4 times)."""
         tolerance = self.settings["tolerance"] * (self.scene["peg"]["width"] / 2 if method == "twist" else 1.0)
-        low, solves = 0.0, 0
-        if self.holds(high, method):
-            raise RuntimeError(f"the 3-D wedge holds {high:.4g} ({method}); raise the bracket")
+        low, solves = 0.0, 1
+        while self.holds(high, method):
+            low, high, solves = high, 2 * high, solves + 1
+            if solves > 5:
+                raise RuntimeError(f"the 3-D wedge holds {low:.4g} ({method})")
         while high - low > tolerance * (1 + 1e-9):
             middle = (low + high) / 2
             solves += 1
@@ -347,7 +350,7 @@ class Wedge3D:
                 low = middle
             else:
                 high = middle
-        return {"threshold": low, "bracket": high - low, "solves": solves + 1}
+        return {"threshold": low, "bracket": high - low, "solves": solves}
 
 
 def rigid_axis(rigid) -> np.ndarray:
@@ -371,12 +374,12 @@ def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
         return {"metrics": metrics, "timings": {"wedge": wedge.wedge_time}, "info": info}
     friction = mu * metrics["sum_normal_N"]
     if s["method"] == "continuous":
-        found = wedge.threshold("continuous", 1.5 * max(metrics["one_dof_full_slide_N"], friction))
+        found = wedge.threshold("continuous", 2 * metrics["one_dof_first_slip_N"])  # the 2-D pull-out: ~first slip
         metrics.update(threshold_force_N=found["threshold"], bracket_N=found["bracket"],
                        degree_of_wedging=found["threshold"] / friction)
     else:
         radius = scene["peg"]["width"] / 2
-        found = wedge.threshold("twist", 1.5 * friction * radius)
+        found = wedge.threshold("twist", friction * radius)
         metrics.update(threshold_moment_Nmm=found["threshold"], bracket_Nmm=found["bracket"],
                        threshold_force_N=found["threshold"] / scene["peg"]["width"],
                        twist_over_friction_torque=found["threshold"] / (friction * radius))
