@@ -14,7 +14,7 @@ from pathlib import Path
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
                   "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
-                  "degree_of_wedging", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",
+                  "degree_of_wedging", "degree_estimate", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",
                   "one_dof_first_slip_N", "one_dof_full_slide_N"]
 METHOD_COLUMNS = ["method", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
                   "dislodge_time_at_threshold_s", "least_impulse_Ns", "least_impulse_peak_N", "quasi_static_pullout_N",
@@ -65,6 +65,7 @@ def degree_rows(cases) -> list[dict]:
                                           "degree_of_wedging", "degree_of_wedging_rotation_held",
                                           "one_dof_first_slip_N", "one_dof_full_slide_N")},
                      "pullout_force_N": m["quasi_static_pullout_N"],
+                     "degree_estimate": 1 - sc["peg"]["insertion_depth"] / (sc["contact"]["mu"] * sc["peg"]["width"]),
                      "pullout_rotation_held_N": m["quasi_static_pullout_N_rotation_held"]})
     return rows
 
@@ -130,6 +131,7 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
             ax.plot([r[key] for r in rows], [r["degree_of_wedging"] for r in rows], "o-", label="free peg")
             ax.plot([r[key] for r in rows], [r["degree_of_wedging_rotation_held"] for r in rows], "s--",
                     label="rotation held")
+            ax.plot([r[key] for r in rows], [r["degree_estimate"] for r in rows], "k:", label="1 - l_d / (mu d)")
             ax.set_xlabel(key)
             ax.grid(True, alpha=0.3)
         axes[0].set_ylabel("pull-out / (mu (N_A + N_B))")
@@ -226,7 +228,7 @@ def main(argv=None) -> int:
              "## Degree of wedging (2-D)", ""]
     lines += _table(degrees, ["peg.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
                               "wedged_N_A", "wedged_N_B", "pullout_force_N", "degree_of_wedging",
-                              "degree_of_wedging_rotation_held"])
+                              "degree_estimate", "degree_of_wedging_rotation_held"])
     lines += ["", "## Ways out (2-D, thesis case 1, coarse)", ""]
     lines += _table(methods, METHOD_COLUMNS[:-1])
     for key, label in (("impulse_at_threshold_Ns", "impulse at the threshold"),
