@@ -17,8 +17,10 @@ thresholds by bisection).
 - Pulse optimisation: frequency, duty, shape and peak force minimising the impulse to
   dislodge: a grid over frequency x duty per shape, then bounded Nelder-Mead (scipy) from the
   best grid point of each shape; the optimum re-run by a fresh simulation from the checkpoint.
-- 3-D: quasi-static pull-out of the wedged cylinder along its axis (and the torque about the
-  axis at which it turns), by bisection; its 2-D estimates from the 3-D contact forces.
+- 3-D: quasi-static pull-out of the wedged cylinder along its axis and the torque about the
+  axis at which it turns, by bisection, both in the one process that wedged it (a checkpoint
+  written on 2 ranks did not restore: the 3-D mesh was partitioned differently in the next
+  process); its 2-D estimates from the 3-D contact forces.
 """
 import copy
 import csv
@@ -372,18 +374,16 @@ def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
     info = {"dofs": wedge.simulation.dofs, "effects": list(scene["effects"])}
     if len(scene["steps"]) <= PULL_STEP:
         return {"metrics": metrics, "timings": {"wedge": wedge.wedge_time}, "info": info}
-    friction = mu * metrics["sum_normal_N"]
-    if s["method"] == "continuous":
-        found = wedge.threshold("continuous", 2 * metrics["one_dof_first_slip_N"])  # the 2-D pull-out: ~first slip
-        metrics.update(threshold_force_N=found["threshold"], bracket_N=found["bracket"],
-                       degree_of_wedging=found["threshold"] / friction)
-    else:
-        radius = scene["peg"]["width"] / 2
-        found = wedge.threshold("twist", friction * radius)
-        metrics.update(threshold_moment_Nmm=found["threshold"], bracket_Nmm=found["bracket"],
-                       threshold_force_N=found["threshold"] / scene["peg"]["width"],
-                       twist_over_friction_torque=found["threshold"] / (friction * radius))
-    metrics.update(solves=found["solves"], pullout_time_s=time.perf_counter() - start - wedge.wedge_time)
+    friction, radius = mu * metrics["sum_normal_N"], scene["peg"]["width"] / 2
+    start_pull = time.perf_counter()
+    pull = wedge.threshold("continuous", 2 * metrics["one_dof_first_slip_N"])  # the 2-D pull-out: ~first slip
+    metrics.update(threshold_force_N=pull["threshold"], bracket_N=pull["bracket"], pull_solves=pull["solves"],
+                   degree_of_wedging=pull["threshold"] / friction, pull_time_s=time.perf_counter() - start_pull)
+    start_twist = time.perf_counter()
+    twist = wedge.threshold("twist", friction * radius)
+    metrics.update(twist_threshold_moment_Nmm=twist["threshold"], twist_bracket_Nmm=twist["bracket"],
+                   twist_solves=twist["solves"], twist_over_friction_torque=twist["threshold"] / (friction * radius),
+                   twist_time_s=time.perf_counter() - start_twist)
     return {"metrics": metrics, "timings": {"wedge": wedge.wedge_time, "total_case": time.perf_counter() - start},
             "info": info}
 

@@ -102,16 +102,22 @@ def rows_3d(cases, degrees) -> list[dict]:
     twin = [r for r in degrees if r["peg.width"] == 40.0 and r["clearance_mm"] == 0.1]
     out = []
     for case, m in cases:
+        if "threshold_force_N" not in m:
+            continue
         mu = case.scene["contact"]["mu"]
-        row = {"method": case.scene["dislodging"]["method"], **{k: v for k, v in m.items() if not k.endswith("_s")}}
-        if row["method"] == "continuous":
-            row["estimate_2d_one_dof_first_slip_N"] = m["one_dof_first_slip_N"]
-            if twin:
-                row["degree_of_wedging_2d_twin"] = twin[0]["degree_of_wedging"]
-                row["estimate_2d_twin_degree_N"] = twin[0]["degree_of_wedging"] * mu * m["sum_normal_N"]
-                row["threshold_over_2d_twin_estimate"] = m["threshold_force_N"] / row["estimate_2d_twin_degree_N"]
-        row["wall_time_s"] = m.get("pullout_time_s", "")
+        common = {k: m[k] for k in ("wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "sum_normal_N", "tilt_deg",
+                                    "wedge_time_s")}
+        row = {"method": "pull along the axis", "threshold_force_N": m["threshold_force_N"], "bracket_N": m["bracket_N"],
+               "degree_of_wedging": m["degree_of_wedging"], "estimate_2d_one_dof_first_slip_N": m["one_dof_first_slip_N"],
+               "solves": m["pull_solves"], "time_s": m["pull_time_s"], **common}
+        if twin:
+            row.update(degree_of_wedging_2d_twin=twin[0]["degree_of_wedging"],
+                       estimate_2d_twin_degree_N=twin[0]["degree_of_wedging"] * mu * m["sum_normal_N"])
+            row["threshold_over_2d_twin_estimate"] = m["threshold_force_N"] / row["estimate_2d_twin_degree_N"]
         out.append(row)
+        out.append({"method": "twist about the axis", "threshold_moment_Nmm": m["twist_threshold_moment_Nmm"],
+                    "bracket_Nmm": m["twist_bracket_Nmm"], "twist_over_friction_torque": m["twist_over_friction_torque"],
+                    "solves": m["twist_solves"], "time_s": m["twist_time_s"], **common})
     return out
 
 
