@@ -120,6 +120,7 @@ class Puller:
             from femcontact.io import write_json_atomic
 
             write_json_atomic(Path(checkpoint, PULLOUT_FILE), self.pullout)
+        self.before_event = None  # (force N, state) of the weakest pull that dislodged, at the start of its event's increment
         factor = self.settings["thickness"]
         rigid = sim.problem.rigid
         rigid.mass, rigid.mass_matrix = rigid.mass * factor, rigid.mass_matrix * factor
@@ -161,6 +162,8 @@ class Puller:
                "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
                "settled": outcome.settled, "wall_s": wall}
         if outcome.event:
+            if self.before_event is None or force < self.before_event[0]:
+                self.before_event = (float(force), outcome.before_event)
             elapsed = outcome.time - start_time
             row.update(dislodge_time_s=elapsed, impulse_Ns=pull_impulse(sim.schedule, elapsed),
                        impulse_frames_Ns=pull_impulse(sim.schedule, frame_time(elapsed, s["frame"])))
@@ -249,6 +252,25 @@ class Puller:
         return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
 
 
+SNAPSHOT_STATES = ("wedged", "before_event")
+"""Subdirectories of a case with a fields.npz: the wedged state (after release), and the weakest
+dislodging pull (the threshold's) at the start of the increment in which the peg lets go."""
+
+
+def write_snapshot_fields(puller, case_dir: Path) -> None:
+    """fields.npz of the wedged state and of the state just before the event (see SNAPSHOT_STATES)."""
+    from femcontact.io import make_dir
+    from femcontact.outputs.fields import write_fields
+
+    sim = puller.simulation
+    states = {"wedged": puller.wedged["state"], "before_event": puller.before_event and puller.before_event[1]}
+    for name in SNAPSHOT_STATES:
+        if states[name] is not None:
+            sim.problem.restore(states[name])
+            write_fields(sim, make_dir(Path(case_dir, name)))
+    sim.resume(puller.wedged)
+
+
 def pull_columns() -> list[str]:
     return ["case", "method", "pulse_hz", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
             "impulse_frames_Ns", "event", "force_over_pullout", "thesis_force_N", "thickness_mm", "rise_at_end_mm",
@@ -288,6 +310,7 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
             writer = csv.DictWriter(stream, fieldnames=pull_columns(), extrasaction="ignore")
             writer.writeheader()
             writer.writerows(rows)
+    write_snapshot_fields(puller, case_dir)
     walls = [row["wall_s"] for row in rows]
     metrics.update(pulls=len(rows), pull_wall_mean_s=float(np.mean(walls)) if walls else 0.0,
                    pull_wall_max_s=float(np.max(walls)) if walls else 0.0)
@@ -354,6 +377,35 @@ def gather(study) -> tuple[list[dict], list[dict]]:
     return sorted(pulls, key=key), sorted(thresholds, key=key)
 
 
+def render_snapshots(study) -> list[Path]:
+    """snapshots/caseN_wedged.png (von Mises at the wedged state) and caseN_METHOD_before_event.png
+    (the threshold pull at the start of the increment in which the peg lets go) for the
+    continuous pull and the 50 Hz pulses (1 mm), zoomed on contact A; skipped without fields."""
+    from femcontact.io import make_dir
+    from femcontact.outputs import snapshot
+    from femcontact.study.runner import read_result
+
+    paths, done = [], set()
+    for case in study.cases:
+        s = case.scene["dislodging"]
+        result = read_result(case.dir)
+        if not result or result["status"] != "ok" or s["thickness"] != 1.0:
+            continue
+        method = "continuous" if s["method"] == "continuous" else f"{s['pulse_hz']:g}Hz"
+        wanted = [("wedged", f"case{s['case']}_wedged")]
+        if method in ("continuous", "50Hz"):
+            wanted.append(("before_event", f"case{s['case']}_{method}_before_event"))
+        for state, name in wanted:
+            fields = case.dir / state / "fields.npz"
+            if name in done or not fields.exists():
+                continue
+            path = make_dir(study.results / "snapshots") / f"{name}.png"
+            snapshot.render(fields, path, zoom="contact_A", zoom_radius=4.0)
+            done.add(name)
+            paths.append(path)
+    return paths
+
+
 def report(study) -> list[Path]:
     """results/NAME/results.csv (one row per pull; replaces the runner's per-case export, which
     stays in results.sqlite), thresholds.csv and the plots; returns the plot paths."""
@@ -414,6 +466,7 @@ def report(study) -> list[Path]:
             fig.savefig(path, dpi=110)
             plt.close(fig)
             paths.append(path)
+    paths += render_snapshots(study)
     if thresholds:
         fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
         for case in sorted({r["case"] for r in thresholds}):

@@ -160,6 +160,7 @@ class Outcome:
     newton_iterations: int = 0
     settled: bool = False  # a periodic (sticking) motion was recognised and the rest skipped
     trace: list = field(default_factory=list)  # (time s, rise mm, velocity mm/s, zone forces N..., monitor)
+    before_event: dict | None = None  # the problem's state at the start of the increment holding the event
 
 
 class DynamicSimulation(Simulation):
@@ -302,6 +303,7 @@ class DynamicSimulation(Simulation):
                 zones = self.zone_forces()
                 hit = self._event(event, rise, zones)
                 if hit:
+                    outcome.before_event = committed
                     t_event = self._locate(hit, event, index, t, dt, committed, y0, previous, rise, outcome)
                     outcome.event, outcome.time = hit, float(self.schedule.start_times[index] + t_event)
                     return outcome
