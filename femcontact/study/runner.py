@@ -412,18 +412,19 @@ class Runner:
     def start(self, case: Case, slot: int) -> None:
         make_dir(case.dir)
         command = self.command(case)
+        worker = self.pool.worker(slot) if self.pool is not None else None
         try:
             (case.dir / "result.json").unlink(missing_ok=True)
             write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
             write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                                         "slot": slot, "worker": self.pool is not None,
+                                                         "slot": slot, "worker": worker and worker.pid,
                                                          "started": time.time()})
             log = open(case.dir / "log.txt", "wb")
         except OSError as error:
             raise WriteError(describe(error, case.dir)) from None
-        if self.pool is not None:  # the worker appends to the log just emptied
+        if worker is not None:  # the worker appends to the log just emptied
             log.close()
-            worker = self.pool.start(slot, case.dir.resolve(), run_arguments(case))
+            worker.submit(case.dir.resolve(), run_arguments(case))
             self.running.append(Job(case, worker.process, slot, time.monotonic(), worker=worker))
             return
         with log:

@@ -44,6 +44,10 @@ class Worker:
         self.reply = b""
 
     @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    @property
     def alive(self) -> bool:
         return self.process.poll() is None
 
@@ -94,14 +98,13 @@ class Pool:
         self.environment, self.preexec_fn = environment, preexec_fn
         self.workers: dict[int, Worker] = {}
 
-    def start(self, slot: int, directory: Path, argv: list[str]) -> Worker:
-        """Run `femcontact ARGV` in `directory` on the slot's worker; returns the worker."""
+    def worker(self, slot: int) -> Worker:
+        """The slot's worker, a new one if it has none alive."""
         worker = self.workers.get(slot)
         if worker is None or not worker.alive:
             if worker is not None:
                 worker.close()
             worker = self.workers[slot] = Worker(self.environment(slot), self.preexec_fn)
-        worker.submit(directory, argv)
         return worker
 
     def close(self) -> None:
