@@ -5,8 +5,8 @@ UFL, gmsh) before its first assembly, about 1.4 s per case. A worker pays it onc
 those modules when it starts, then runs each case it is sent exactly as `femcontact run`
 would (`femcontact.cli.main` with the same arguments, in the case directory, its stdout and
 stderr appended to the case's log.txt) and, between cases, puts back what a case leaves in a
-process: PETSc options it set, the gmsh session (with its options), the working directory,
-garbage.
+process: PETSc options it set, UFL's object counters, the gmsh session (with its options), the
+working directory, garbage.
 
 Protocol: the runner writes one JSON line per case on the worker's stdin,
 {"dir": CASE_DIR, "argv": ["run", "scene.toml", "--out", ".", ...]}, and reads one JSON line
@@ -127,12 +127,14 @@ def serve(entry: str, preload: list[str]) -> None:
             importlib.import_module(name)
         except Exception:  # the case that needs it meets the error again, in its own log
             pass
-    home, options = os.getcwd(), _petsc_options()
+    gc.collect()
+    gc.freeze()  # what is loaded now stays: a collection after a case looks at the case's objects only
+    home, baseline = os.getcwd(), process_state()
     for line in requests:
         request = json.loads(line)
         code = _run_case(entry, request["dir"], request["argv"], quiet)
         os.chdir(home)
-        _clean_up(options)
+        clean_up(baseline)
         replies.write(json.dumps({"code": code}) + "\n")
         replies.flush()
 
@@ -169,25 +171,39 @@ def _flush() -> None:
     ctypes.CDLL(None).fflush(None)
 
 
-def _petsc_options() -> dict:
-    if "petsc4py.PETSc" not in sys.modules:
-        return {}
-    return sys.modules["petsc4py.PETSc"].Options().getAll()
+def process_state() -> dict:
+    """What a case may change in the process, as it is now: PETSc's options and UFL's counters.
+
+    UFL numbers every Coefficient, Constant, Index, Label and mesh it creates, process-wide, and
+    orders the operands of a sum by their text, counts included: once a count gains a digit (seen
+    at the 8th 2-D wedging case in one process) a form's terms come in another order than in a
+    fresh process, so its signature differs and it is compiled again."""
+    state = {"petsc": {}, "ufl": {}}
+    if "petsc4py.PETSc" in sys.modules:
+        state["petsc"] = sys.modules["petsc4py.PETSc"].Options().getAll()
+    if "ufl.classes" in sys.modules:
+        state["ufl"] = {(cls, name): cls.__dict__[name] for cls in vars(sys.modules["ufl.classes"]).values()
+                        if isinstance(cls, type) for name in ("_globalcount", "_ufl_global_id")
+                        if name in cls.__dict__}
+    return state
 
 
-def _clean_up(options: dict) -> None:
-    """Undo what a case leaves in the process: PETSc options back to `options`, gmsh's session
-    ended (its options back to their defaults), its objects collected."""
+def clean_up(baseline: dict) -> None:
+    """Undo what a case leaves in the process: PETSc options and UFL counters back to `baseline`
+    (process_state() before the first case), gmsh's session ended (its options back to their
+    defaults), the case's objects collected."""
+    gc.collect()  # first: nothing of the case is left to use a counter again
     if "petsc4py.PETSc" in sys.modules:
         database = sys.modules["petsc4py.PETSc"].Options()
         for key in database.getAll():
-            if key not in options:
+            if key not in baseline["petsc"]:
                 database.delValue(key)
-        for key, value in options.items():
+        for key, value in baseline["petsc"].items():
             database.setValue(key, value)
+    for (cls, name), value in baseline["ufl"].items():
+        setattr(cls, name, value)
     if "geometry.gmsh_tools" in sys.modules:
         sys.modules["geometry.gmsh_tools"].reset()
-    gc.collect()
 
 
 if __name__ == "__main__":

@@ -128,6 +128,24 @@ def test_worker_exit_codes_and_log_match_a_process(tmp_path, monkeypatch, fake_w
     assert not worker.alive
 
 
+def test_clean_up_restores_petsc_options_and_ufl_counters():
+    """Between cases a worker puts back the PETSc options and UFL's object counters (a case run
+    later in the process then builds the forms a fresh process builds, with the same signatures)."""
+    import ufl
+    from petsc4py import PETSc
+
+    baseline = workers.process_state()
+    PETSc.Options()["femcontact_test_pc_type"] = "jacobi"
+    mesh = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.triangle, 1))
+    ufl.Constant(mesh), ufl.Coefficient(ufl.FunctionSpace(mesh, ufl.FiniteElement("Lagrange", ufl.triangle, 1)))
+    ufl.indices(3)
+    changed = workers.process_state()
+    assert changed["petsc"] != baseline["petsc"] and changed["ufl"] != baseline["ufl"]
+    del mesh
+    workers.clean_up(baseline)
+    assert workers.process_state() == baseline
+
+
 def test_stale_compilations_are_removed_and_compiled_ones_kept(tmp_path):
     """femcontact run's JIT cache clean-up (one directory listing for the whole cache)."""
     names = ["a.c", "a.c.cached", "a.cpython-311-x86_64-linux-gnu.so", "b.c", "b.so", "c.c", "c.c.cached",
