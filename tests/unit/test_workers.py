@@ -98,6 +98,17 @@ def test_a_crashed_or_hanging_worker_fails_its_case_and_is_replaced(tmp_path, mo
     assert not any(Path(f"/proc/{pid}").exists() for pid in pids)  # no worker left behind
 
 
+def test_a_worker_is_replaced_after_its_share_of_cases(tmp_path, monkeypatch, fake_worker):
+    monkeypatch.setattr(workers, "CASES_PER_WORKER", 2)
+    path = tmp_path / "demo.toml"
+    path.write_text('[study]\nname = "demo"\nscene = "base.toml"\njobs = 1\n'
+                    '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3] }\n')
+    assert run_study(path, tmp_path / "results") == 0
+    runs = sorted(cases_of(tmp_path / "results", "demo").values(), key=lambda case: case[0]["contact"]["mu"])
+    pids = [record["worker"] for _, _, record in runs]
+    assert pids[0] == pids[1] != pids[2] and not any(Path(f"/proc/{pid}").exists() for pid in pids)
+
+
 def test_worker_exit_codes_and_log_match_a_process(tmp_path, monkeypatch, fake_worker):
     """A failing case (exit 1, its own result) and bad input (exit 2, no result: the runner
     records the code and the log's last line) end in a worker as in a fresh process."""
