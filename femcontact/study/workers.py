@@ -1,7 +1,7 @@
 """Warm workers: long-lived processes that run a study's one-rank cases one after another.
 
 A fresh `mpirun -n 1 femcontact run` pays MPI, Python and import start-up (mpi4py, DOLFINx,
-UFL, gmsh) before its first assembly, about 1.4 s per case. A worker pays it once: it imports
+UFL, gmsh) before its first assembly, for every case. A worker pays it once: it imports
 those modules when it starts, then runs each case it is sent exactly as `femcontact run`
 would (`femcontact.cli.main` with the same arguments, in the case directory, its stdout and
 stderr appended to the case's log.txt) and, between cases, puts back what a case leaves in a
