@@ -14,6 +14,7 @@ A one-case study before them compiles the forms, so neither sweep pays for JIT c
 `python -m femcontact.scenarios.runner_overhead` runs this alone; `make bench` includes it.
 """
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -28,8 +29,10 @@ def run_study(root: Path, name: str, workers: bool, sweep: str) -> list[dict]:
     path = root / f"{name}.toml"
     path.write_text(f'[study]\nname = "{name}"\nscene = "{SCENE}"\njobs = 1\nworkers = {str(workers).lower()}\n'
                     f"{OVERRIDES}{sweep}")
+    # env: Python's view of it; MPI started in this process (make bench) added PMIX_* and OMPI_* variables
+    # to the C environment, which a child would inherit and its `mpirun` fail on (exit 1, no message)
     subprocess.run([sys.executable, "-m", "femcontact", "study", str(path), "--results", str(root), "--force",
-                    "--quiet"], check=True, stdout=subprocess.DEVNULL)
+                    "--quiet"], check=True, stdout=subprocess.DEVNULL, env=dict(os.environ))
     records = []
     for case in (root / name / "cases").iterdir():
         result, runner = (json.loads((case / f"{kind}.json").read_text()) for kind in ("result", "runner"))
