@@ -179,6 +179,10 @@ SOLVER = {
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
     "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
                          "root of R.d or backtracking"),
+    "predictor": Field("str", "none", "initial guess of an increment: 'none' (the last converged state) or "
+                       "'extrapolate' (plus the last increment's displacement change, scaled by dt, within a step): "
+                       "a contact that opens under prescribed motion (a withdrawal) then starts closed",
+                       choices=("none", "extrapolate")),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }
