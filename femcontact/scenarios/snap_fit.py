@@ -14,9 +14,17 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 - insertion_force_ratio / withdrawal_force_ratio: F_ax / F_lat averaged over the increments
   whose contact lies on the nose (not on the shank) and whose lateral force is above
   `RATIO_FLOOR` of its peak: on a flat taper, the statics tan(alpha +- phi);
-- jammed: in some insertion increment the apex of spring B is in contact with the nose
-  and its force lies strictly inside the friction cone about the nose's normal, i.e. the
-  apex sticks to the nose and is pushed along instead of sliding (`STICK_MARGIN`);
+- jammed, with `jam_reason` and `jam_depth` (mm, the first jammed increment): in some insertion
+  increment (1) the apex of spring B is in contact with the nose and its force lies strictly
+  inside the friction cone about the nose's normal, i.e. the apex sticks to the nose and is
+  pushed along instead of sliding (`STICK_MARGIN`); or (2) the insertion force runs away:
+  dF_ax/d(depth) > `RUNAWAY` k (k = 3EI/L^3); or (3) the spring buckles: the axial force at its
+  root exceeds the Euler load of a cantilever, pi^2 EI / (4 L^2) (`buckling_ratio`);
+- `run` (what `femcontact run` calls for this family): an insertion increment that Newton cannot
+  solve (it cycles between stick and slip where no sliding equilibrium exists) is solved once
+  more with the apex stuck (`stuck_increment`); if the stuck state is an equilibrium of the real
+  friction law, the run ends there as a jam (criterion 1 then flags that increment,
+  `stopped` says why) instead of failing;
 - max_von_mises, yield_ratio (its ratio to the spring's yield stress), yielded: the FE field's
   largest value, which includes the stress concentration at the sharp apex under contact;
 - root_stress: the beam stress at the root of spring B, 6 |M| / h^2 + |N| / h (MPa) from the
@@ -32,6 +40,8 @@ from femcontact.references import snap_fit as reference
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
+RUNAWAY = 20.0       # dF_ax/d(depth) over the spring's stiffness 3EI/L^3 above which the insertion force runs away
+STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
 
 
 def _zones(scene: dict) -> list[str]:
@@ -82,11 +92,8 @@ def snap_fit_metrics(simulation) -> dict:
     out["peak_withdrawal_force"] = float((-withdraw["axial"]).max(initial=0.0))
     out["insertion_force_ratio"] = _ratio(insert, nose.length)
     out["withdrawal_force_ratio"] = _ratio(withdraw, nose.length)
-    touching = (insert["normal"] > RATIO_FLOOR * max(insert["normal"].max(initial=0.0), 1e-300)) \
-        & (np.nan_to_num(insert["z"], nan=np.inf) < (1 - NOSE_MARGIN) * nose.length)
-    stuck = touching & (np.abs(insert["tangential"]) < (1 - STICK_MARGIN) * mu * insert["normal"])
-    out["jammed"] = bool(stuck.any())
-    out["stuck_increments"] = int(stuck.sum())
+    out.update(jamming(scene, [row for row in history if row["step"] == "insert"], insert, mu))
+    out["stopped"] = simulation.stopped
     out["max_von_mises"] = max(row["max_von_mises"] for row in history)
     out["yield_ratio"] = out["max_von_mises"] / scene["materials"]["spring"]["yield_stress"]
     out["yielded"] = bool(out["yield_ratio"] > 1)
@@ -99,6 +106,104 @@ def snap_fit_metrics(simulation) -> dict:
         out["withdrawal_ratio_statics"] = float(reference.force_ratio(alpha, mu, withdrawal=True))
     out["wall_time_s"] = float(sum(simulation.timings.values()))
     return out
+
+
+def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
+    """jammed, jam_reason, jam_depth (mm), stuck_increments, buckling_ratio of the insertion
+    rows (`insert`: their `forces`)."""
+    from geometry.snap_fit import nose_profile
+
+    spring, E = scene["spring"], scene["materials"]["spring"]["E"]
+    H = nose_profile(scene["peg"]).length
+    touching = (insert["normal"] > RATIO_FLOOR * max(insert["normal"].max(initial=0.0), 1e-300)) \
+        & (np.nan_to_num(insert["z"], nan=np.inf) < (1 - NOSE_MARGIN) * H)
+    stuck = touching & (np.abs(insert["tangential"]) < (1 - STICK_MARGIN) * mu * insert["normal"])
+    k = reference.cantilever_stiffness(E, spring["thickness"], spring["length"], spring["width"])
+    step = np.diff(insert["depth"], prepend=0.0)
+    slope = np.divide(np.diff(insert["axial"], prepend=0.0), step, out=np.zeros_like(step), where=step > 0)
+    runaway = slope > RUNAWAY * k
+    euler = math.pi ** 2 * E * spring["width"] * spring["thickness"] ** 3 / 12 / (4 * spring["length"] ** 2)
+    axial = np.array([spring["width"] * abs(row["reaction_root_B_y"]) for row in rows])
+    buckled = axial > euler
+    reasons, first = [], []
+    if stuck.any():
+        i = int(np.argmax(stuck))
+        reasons.append(f"the contact force lies inside the friction cone at depth {insert['depth'][i]:.4g} mm "
+                       f"(|F_t| / F_n = {abs(insert['tangential'][i]) / insert['normal'][i]:.3f} < mu = {mu:g}): "
+                       "the apex sticks to the nose")
+        first.append(insert["depth"][i])
+    if runaway.any():
+        i = int(np.argmax(runaway))
+        reasons.append(f"the insertion force runs away at depth {insert['depth'][i]:.4g} mm "
+                       f"(dF/d(depth) = {slope[i]:.4g} N/mm > {RUNAWAY:g} x 3EI/L^3 = {RUNAWAY * k:.4g} N/mm)")
+        first.append(insert["depth"][i])
+    if buckled.any():
+        i = int(np.argmax(buckled))
+        reasons.append(f"the spring buckles at depth {insert['depth'][i]:.4g} mm (axial root force {axial[i]:.4g} N "
+                       f"> Euler load pi^2 EI / 4L^2 = {euler:.4g} N)")
+        first.append(insert["depth"][i])
+    return {"jammed": bool(reasons), "jam_reason": "; ".join(reasons) or None,
+            "jam_depth": float(min(first)) if first else None, "stuck_increments": int(stuck.sum()),
+            "buckling_ratio": float(axial.max(initial=0.0) / euler)}
+
+
+def run(simulation, first_step: int = 0) -> None:
+    """Run a snap-fit simulation step by step. An insertion increment that fails after all cuts
+    is tried once more, over the step's nominal increment, with the apex stuck to the nose
+    (`stuck_increment`); if that is an equilibrium of the real friction law, the run ends there
+    (`simulation.stopped`), a jam; otherwise the failure stands."""
+    from femcontact.solver.stepping import SimulationFailed
+
+    for index, step in enumerate(simulation.scene["steps"][first_step:], start=first_step):
+        try:
+            if not simulation.run_step(index, step):
+                return
+        except SimulationFailed as failure:
+            if step["name"] != "insert" or not stuck_increment(simulation, index, step):
+                raise
+            simulation.stopped = (f"step 'insert' jammed at depth {simulation.history[-1]['rigid_y'] * -1 - simulation.scene['peg']['start_gap']:.4g} mm: "
+                                  f"Newton found no equilibrium after {simulation.scene['solver']['max_cuts']} cuts "
+                                  f"({str(failure).split(';')[0].split(': ')[-1]}); the apex stuck to the nose is one, "
+                                  "its force inside the friction cone")
+            return
+
+
+def stuck_increment(simulation, index: int, step: dict) -> bool:
+    """Solve the next increment (nominal length) from the last converged state with friction
+    coefficient `STICK_MU` (the apex sticks), then with the scene's mu from there: if the real law
+    accepts the state (Newton converges) and the apex's force lies inside the friction cone, record
+    it and return True; else restore, False."""
+    from femcontact.solver.newton import NewtonFailure
+
+    p = simulation.problem
+    if "mu" not in p.constants:
+        return False
+    mu, real = p.constants["mu"], float(p.constants["mu"].value)
+    start = simulation.schedule.start_times[index]
+    done = max([row["time"] - start for row in simulation.history if row["step"] == step["name"]], default=0.0)
+    dt = step["duration"] / step["increments"]
+    load = simulation.schedule.load(index, min(done + dt, step["duration"]), dt)
+    state = p.state()
+    try:
+        p.begin_increment(load)
+        simulation._prescribe(load)
+        mu.value = STICK_MU
+        iterations = simulation.newton.solve(load)
+        mu.value = real
+        iterations += simulation.newton.solve(load)
+    except NewtonFailure:
+        p.restore(state)
+        return False
+    finally:
+        mu.value = real
+    row = {**simulation.recorder.row(load, iterations), "stabilization_force": 0.0}
+    f = forces(simulation.scene, [row])
+    if not (f["normal"][0] > 0 and abs(f["tangential"][0]) < (1 - STICK_MARGIN) * real * f["normal"][0]):
+        p.restore(state)
+        return False
+    p.commit(load.dt)
+    simulation._record(row)
+    return True
 
 
 def root_stress(scene: dict, rows: list[dict]) -> float:
