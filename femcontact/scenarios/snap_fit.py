@@ -32,6 +32,8 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 - the reduced model's peak insertion force and jam prediction beside them.
 """
 import math
+import time
+from pathlib import Path
 
 import numpy as np
 
@@ -42,10 +44,16 @@ STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, no
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
 RUNAWAY = 20.0       # dF_ax/d(depth) over the spring's stiffness 3EI/L^3 above which the insertion force runs away
 STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
+SCENE = Path(__file__).resolve().parents[2] / "scenes" / "snap_fit_2d.toml"
 
 
 def _zones(scene: dict) -> list[str]:
     return ["B", "A"][: scene["spring"]["count"]]
+
+
+def per_width(scene: dict) -> float:
+    """Factor from history forces to N: the spring's width in 2-D (per mm), 1 in 3-D."""
+    return scene["spring"]["width"] if scene["dim"] == 2 else 1.0
 
 
 def forces(scene: dict, rows: list[dict]) -> dict:
@@ -53,7 +61,7 @@ def forces(scene: dict, rows: list[dict]) -> dict:
     force of spring B split along the nose's normal and tangent there (N)."""
     from geometry.snap_fit import layout, nose_profile
 
-    width, nose, place = scene["spring"]["width"], nose_profile(scene["peg"]), layout(scene)
+    width, nose, place = per_width(scene), nose_profile(scene["peg"]), layout(scene)
     out = {key: [] for key in ("depth", "axial", "lateral", "z", "normal", "tangential")}
     for row in rows:
         out["depth"].append(-row["rigid_y"] - scene["peg"]["start_gap"])
@@ -123,7 +131,7 @@ def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
     slope = np.divide(np.diff(insert["axial"], prepend=0.0), step, out=np.zeros_like(step), where=step > 0)
     runaway = slope > RUNAWAY * k
     euler = math.pi ** 2 * E * spring["width"] * spring["thickness"] ** 3 / 12 / (4 * spring["length"] ** 2)
-    axial = np.array([spring["width"] * abs(row["reaction_root_B_y"]) for row in rows])
+    axial = np.array([per_width(scene) * abs(row["reaction_root_B_y"]) for row in rows])
     buckled = axial > euler
     reasons, first = [], []
     if stuck.any():
@@ -209,13 +217,14 @@ def stuck_increment(simulation, index: int, step: dict) -> bool:
 def root_stress(scene: dict, rows: list[dict]) -> float:
     """Largest beam stress (MPa) at the root of spring B over the rows: bending 6 |M| / h^2 plus
     axial |N| / h, from the root's reactions per mm of width (the moment recorded about the origin
-    is moved to the root's centre)."""
+    is moved to the root's centre; 3-D reactions are divided by the width)."""
     from geometry.snap_fit import layout
 
     h = scene["spring"]["thickness"]
+    scale = per_width(scene) / scene["spring"]["width"]  # history reactions to N/mm of width
     centre = layout(scene).inner + h / 2
-    return float(max((6 * abs(row["reaction_root_B_Mz"] - centre * row["reaction_root_B_y"]) / h ** 2
-                      + abs(row["reaction_root_B_y"]) / h for row in rows), default=0.0))
+    return float(max((scale * (6 * abs(row["reaction_root_B_Mz"] - centre * row["reaction_root_B_y"]) / h ** 2
+                               + abs(row["reaction_root_B_y"]) / h) for row in rows), default=0.0))
 
 
 def reduced_model(scene: dict) -> dict:
@@ -238,3 +247,51 @@ def reduced_model(scene: dict) -> dict:
             "model_jammed": bool(reference.jams(alpha, mu, couple).any()),
             "cone_jammed": bool(reference.jams_by_friction_cone(alpha, mu).any()),
             "max_nose_angle_deg": float(np.degrees(alpha.max()))}
+
+
+def accuracy_case(knob: str, setting: str, overrides: list[str]) -> dict:
+    """One run of scenes/snap_fit_2d.toml for `make accuracy`: wall time (s) of mesh, forms, solve
+    and metrics, the peak insertion force (N) and the insertion force ratio against the statics."""
+    from femcontact.config.scene import load_scene
+    from femcontact.solver.stepping import Simulation
+
+    start = time.perf_counter()
+    scene = load_scene(SCENE, overrides)
+    simulation = Simulation(scene)
+    run(simulation)
+    m = snap_fit_metrics(simulation)
+    return {"knob": knob, "setting": setting, "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
+            "newton_iterations": sum(row["newton_iterations"] for row in simulation.history),
+            "resolution": scene["mesh"]["resolution"], "increments": scene["steps"][0]["increments"],
+            "peak_insertion_force": m["peak_insertion_force"], "insertion_force_ratio": m["insertion_force_ratio"],
+            "insertion_ratio_statics": m["insertion_ratio_statics"],
+            "error_insertion_force_ratio": abs(m["insertion_force_ratio"] / m["insertion_ratio_statics"] - 1)}
+
+
+def accuracy_rows() -> tuple[list[dict], list[str]]:
+    """`make accuracy` rows of the contract scene (two springs, taper 30 deg, mu 0.2): mesh
+    resolution at the scene's 40 increments per step, and increments per step at resolution 1.
+    Errors: the insertion force ratio against the statics tan(alpha + phi); the peak insertion
+    force against a Richardson extrapolation of each knob's three finest settings (or the finest)."""
+    from femcontact.scenarios.accuracy import richardson
+
+    accuracy_case("", "warm-up", ["mesh.resolution=0.5"])
+    resolutions, increments = (0.5, 0.7, 1.0, 1.4, 2.0), (10, 20, 40, 80, 160, 320)
+    mesh = [accuracy_case("mesh (P2)", f"resolution {r:g}", [f"mesh.resolution={r}"]) for r in resolutions]
+    steps = [accuracy_case("increments", f"{n} per step", [f"steps.0.increments={n}", f"steps.1.increments={n}"])
+             for n in increments]
+    notes = [f"Insertion force ratio against the statics tan(alpha + phi) = {mesh[0]['insertion_ratio_statics']:.6f} "
+             "(taper 30 deg, mu 0.2)."]
+    for rows, label, ratio, what in ((mesh, "resolutions", resolutions[-1] / resolutions[-2], "resolution"),
+                                     (steps, "increment counts", 2.0, "increments")):
+        finest = [row["peak_insertion_force"] for row in rows[-3:]]
+        limit, order = richardson(finest, ratio)
+        for row in rows:
+            row["error_peak_insertion_force"] = abs(row["peak_insertion_force"] / limit - 1)
+        settings = ", ".join(row["setting"] for row in rows[-3:])
+        how = (f"Richardson extrapolation of {settings} (observed order {order:.2f})"
+               if math.isfinite(order) and order > 0 else
+               f"the finest setting, {rows[-1]['setting']} (no Richardson: the three finest values do not converge "
+               f"monotonically, observed order {order:.2f})")
+        notes.append(f"Reference peak insertion force for the {label}: {limit:.6g} N, from {how}.")
+    return mesh + steps, notes
