@@ -17,9 +17,12 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 - jammed, with `jam_reason` and `jam_depth` (mm, the first jammed increment): in some insertion
   increment (1) the apex of spring B is in contact with the nose and its force lies strictly
   inside the friction cone about the nose's normal, i.e. the apex sticks to the nose and is
-  pushed along instead of sliding (`STICK_MARGIN`); or (2) the insertion force runs away:
-  dF_ax/d(depth) > `RUNAWAY` k (k = 3EI/L^3); or (3) the spring buckles: the axial force at its
-  root exceeds the Euler load of a cantilever, pi^2 EI / (4 L^2) (`buckling_ratio`);
+  pushed along instead of sliding (`STICK_MARGIN`); or (2) the spring buckles: the axial force
+  at its root exceeds the Euler load of a cantilever, pi^2 EI / (4 L^2) (`buckling_ratio`);
+- max_insertion_slope: the steepest rise of the insertion force, max dF_ax/d(depth) (N/mm), and
+  its ratio to k = 3EI/L^3: how fast the force runs away. Not a jam criterion: measured on the
+  study's spring, sliding within 10 % of the reduced model's bound rises at up to 60 k, the stuck
+  (jammed) apex at 83-95 k, too close for a threshold;
 - `run` (what `femcontact run` calls for this family): an insertion increment that Newton cannot
   solve (it cycles between stick and slip where no sliding equilibrium exists) is solved once
   more with the apex stuck (`stuck_increment`); if the stuck state is an equilibrium of the real
@@ -42,7 +45,6 @@ from femcontact.references import snap_fit as reference
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
-RUNAWAY = 20.0       # dF_ax/d(depth) over the spring's stiffness 3EI/L^3 above which the insertion force runs away
 STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
 SCENE = Path(__file__).resolve().parents[2] / "scenes" / "snap_fit_2d.toml"
 
@@ -117,8 +119,8 @@ def snap_fit_metrics(simulation) -> dict:
 
 
 def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
-    """jammed, jam_reason, jam_depth (mm), stuck_increments, buckling_ratio of the insertion
-    rows (`insert`: their `forces`)."""
+    """jammed, jam_reason, jam_depth (mm), stuck_increments, buckling_ratio, max_insertion_slope
+    (N/mm) of the insertion rows (`insert`: their `forces`)."""
     from geometry.snap_fit import nose_profile
 
     spring, E = scene["spring"], scene["materials"]["spring"]["E"]
@@ -129,7 +131,6 @@ def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
     k = reference.cantilever_stiffness(E, spring["thickness"], spring["length"], spring["width"])
     step = np.diff(insert["depth"], prepend=0.0)
     slope = np.divide(np.diff(insert["axial"], prepend=0.0), step, out=np.zeros_like(step), where=step > 0)
-    runaway = slope > RUNAWAY * k
     euler = math.pi ** 2 * E * spring["width"] * spring["thickness"] ** 3 / 12 / (4 * spring["length"] ** 2)
     axial = np.array([per_width(scene) * abs(row["reaction_root_B_y"]) for row in rows])
     buckled = axial > euler
@@ -140,11 +141,6 @@ def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
                        f"(|F_t| / F_n = {abs(insert['tangential'][i]) / insert['normal'][i]:.3f} < mu = {mu:g}): "
                        "the apex sticks to the nose")
         first.append(insert["depth"][i])
-    if runaway.any():
-        i = int(np.argmax(runaway))
-        reasons.append(f"the insertion force runs away at depth {insert['depth'][i]:.4g} mm "
-                       f"(dF/d(depth) = {slope[i]:.4g} N/mm > {RUNAWAY:g} x 3EI/L^3 = {RUNAWAY * k:.4g} N/mm)")
-        first.append(insert["depth"][i])
     if buckled.any():
         i = int(np.argmax(buckled))
         reasons.append(f"the spring buckles at depth {insert['depth'][i]:.4g} mm (axial root force {axial[i]:.4g} N "
@@ -152,7 +148,8 @@ def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
         first.append(insert["depth"][i])
     return {"jammed": bool(reasons), "jam_reason": "; ".join(reasons) or None,
             "jam_depth": float(min(first)) if first else None, "stuck_increments": int(stuck.sum()),
-            "buckling_ratio": float(axial.max(initial=0.0) / euler)}
+            "buckling_ratio": float(axial.max(initial=0.0) / euler),
+            "max_insertion_slope": float(slope.max(initial=0.0)), "max_insertion_slope_over_k": float(slope.max(initial=0.0) / k)}
 
 
 def run(simulation, first_step: int = 0) -> None:
