@@ -22,7 +22,7 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 - max_insertion_slope: the steepest rise of the insertion force, max dF_ax/d(depth) (N/mm), and
   its ratio to k = 3EI/L^3: how fast the force runs away. Not a jam criterion: measured on the
   study's spring, sliding within 10 % of the reduced model's bound rises at up to 60 k, the stuck
-  (jammed) apex at 83-95 k, too close for a threshold;
+  (jammed) apex at 103-151 k, too close for a robust threshold;
 - `run` (what `femcontact run` calls for this family): an insertion increment that Newton cannot
   solve (it cycles between stick and slip where no sliding equilibrium exists) is solved once
   more with the apex stuck (`stuck_increment`); if the stuck state is an equilibrium of the real
