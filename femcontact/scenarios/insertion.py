@@ -267,7 +267,7 @@ def analytic_metrics(scene: dict, curve: dict) -> dict:
 
 
 # ---- `make accuracy`: the 2-D insertion's accuracy against wall time -----------------------------
-ACCURACY_RESOLUTIONS = (0.5, 0.7, 1.0, 1.4, 2.0)
+ACCURACY_RESOLUTIONS = (0.5, 0.7, 1.0, 1.4)
 ACCURACY_INCREMENTS = (26, 52, 104)
 ACCURACY_RTOLS = (1e-6, 1e-9, 1e-11)
 ACCURACY_KEYS = ("peak_force", "two_point_onset")
