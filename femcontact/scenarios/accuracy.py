@@ -10,7 +10,9 @@ beforehand so the JIT cache is warm):
   extrapolation of the three finest resolutions, for the residual force R_A after release
   and the released tilt;
 - 3-D wedging (scenes/wedging_3d.toml, 2 ranks, `--with-3d`): resolution, against the finest;
-- the presets `accuracy = fast | balanced | accurate` on both 2-D problems.
+- the presets `accuracy = fast | balanced | accurate` on both 2-D problems;
+- 2-D insertion (scenes/insertion_2d.toml; rows from femcontact.scenarios.insertion): the in-hole
+  peak insertion force and the two-point onset against resolution, load increments and rtol.
 
 Each problem is one entry of `PROBLEMS`: a function returning its rows (and notes), the
 error columns of its table and its Pareto plots. A study family adds its rows by adding
@@ -166,6 +168,9 @@ PROBLEMS = {
                          ("error_insertion_force_ratio", "Snap fit (2-D): insertion force ratio against statics"))),
     "wedging_3d": Problem("femcontact.scenarios.accuracy:wedging_3d_rows", ("error_resultant",),
                           (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
+    "insertion": Problem("femcontact.scenarios.insertion:accuracy_rows", ("error_peak_force", "error_two_point_onset"),
+                         (("error_peak_force", "2-D insertion: in-hole peak insertion force"),
+                          ("error_two_point_onset", "2-D insertion: two-point onset depth"))),
 }
 
 
