@@ -69,6 +69,7 @@ class SchurNewton:
         self.extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
         self.bc_dofs = p.support_dof_set
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
+        self._assembled = None  # (load, u, r, residual) of the last residual assembly
 
     def _near_nullspace(self) -> PETSc.NullSpace:
         """Near-nullspace of elasticity (translations and rotations) for algebraic multigrid."""
@@ -114,7 +115,18 @@ class SchurNewton:
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
         scale = max(self.b_bulk.norm(), np.linalg.norm(Q_ext), np.linalg.norm(G))
+        self._assembled = (load, p.u.x.array.copy(), p.rigid.values.copy(), (R_u, R_r, scale))
         return R_u, R_r, scale
+
+    def current_residual(self, load):
+        """`assemble_residual` at the current state, reusing the last assembly when it was
+        made there (the converged state of an increment, for the outputs)."""
+        p = self.problem
+        if self._assembled is not None:
+            at, u, r, residual = self._assembled
+            if at is load and np.array_equal(u, p.u.x.array) and np.array_equal(r, p.rigid.values):
+                return residual
+        return self.assemble_residual(load)
 
     def norm(self, R_u, R_r) -> float:
         free = self.problem.rigid.free
@@ -292,16 +304,19 @@ class SchurNewton:
             return trial
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
-            a_lo, a_hi, (a, g) = 0.0, 1.0, (1.0, g1)
+            a_lo, a_hi, (a, g), flat = 0.0, 1.0, (1.0, g1), False
             for _ in range(ROOT_EVALUATIONS):
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
                 c = (g - g0 + g0 * a) / (a * a)
                 alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
                 if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
+                if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
+                    alpha = a_lo + 0.125 * (a_hi - a_lo)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
-                a, g = alpha, self._slope(trial, du, dr)
+                previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
+                flat = 0 < g and abs(g - previous) <= 0.1 * (g - g0)
                 if not np.isfinite(g):
                     break
                 if abs(g) <= 0.5 * abs(g0):
