@@ -97,11 +97,18 @@ def remove_stale_compilations(directory: Path, older_than: float) -> None:
     compiling leaves them, and every later run would wait for that compilation and time out."""
     import time
 
-    for source in Path(directory).glob("*.c"):
-        try:
-            stale = time.time() - source.stat().st_mtime >= older_than
-        except FileNotFoundError:
-            continue
-        if stale and not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
-            source.unlink(missing_ok=True)
-            source.with_suffix(".c.cached").unlink(missing_ok=True)
+    try:
+        names = os.listdir(directory)  # once: a cache holds thousands of files
+    except FileNotFoundError:
+        return
+    compiled = {name[:i] for name in names if name.endswith(".so") for i, c in enumerate(name) if c == "."}
+    for name in names:
+        source = Path(directory, name)
+        if name.endswith(".c") and source.stem not in compiled:  # no STEM.so nor STEM.*.so
+            try:
+                stale = time.time() - source.stat().st_mtime >= older_than
+            except FileNotFoundError:
+                continue
+            if stale:
+                source.unlink(missing_ok=True)
+                source.with_suffix(".c.cached").unlink(missing_ok=True)

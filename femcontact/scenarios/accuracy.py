@@ -12,16 +12,21 @@ beforehand so the JIT cache is warm):
 - 3-D wedging (scenes/wedging_3d.toml, 2 ranks, `--with-3d`): resolution, against the finest;
 - the presets `accuracy = fast | balanced | accurate` on both 2-D problems.
 
-Writes results/accuracy/accuracy.md, accuracy.json and one Pareto plot per problem
-(error against wall time, one marker per setting, the Pareto front joined).
+Each problem is one entry of `PROBLEMS`: a function returning its rows (and notes), the
+error columns of its table and its Pareto plots. A study family adds its rows by adding
+an entry whose function lives in the family's own module. Writes
+results/accuracy/accuracy.md, accuracy.json and one Pareto plot per problem (error
+against wall time, one marker per setting, the Pareto front joined).
 """
 import argparse
+import importlib
 import json
 import math
 import os
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from femcontact.config.presets import PRESETS
@@ -49,12 +54,12 @@ def hertz_case(label: str, knob: str, contact_size: float, degree: int = 1, gamm
     measured = hertz.measure(simulation)
     wall = time.perf_counter() - start
     a, p0 = hertz.reference(data)
-    return {"problem": "hertz", "knob": knob, "setting": label, "dofs": simulation.dofs, "wall_time": wall,
+    return {"knob": knob, "setting": label, "dofs": simulation.dofs, "wall_time": wall,
             "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
             "error_a": abs(measured["a"] / a - 1), "error_p0": abs(measured["p0"] / p0 - 1)}
 
 
-def hertz_rows() -> list[dict]:
+def hertz_rows() -> tuple[list[dict], list[str]]:
     from femcontact.references.hertz import benchmark_half_width
 
     a = benchmark_half_width()
@@ -67,7 +72,7 @@ def hertz_rows() -> list[dict]:
     rows += [hertz_case(f"rtol {rtol:g}, level 2", "Newton rtol", size(2), rtol=rtol) for rtol in (1e-6, 1e-11)]
     rows += [hertz_case(f"preset {name}", "preset", size(1), resolution=PRESETS[name]["mesh"]["resolution"],
                         rtol=PRESETS[name]["solver"]["rtol"]) for name in PRESET_NAMES]
-    return rows
+    return rows, []
 
 
 def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) -> dict:
@@ -82,7 +87,7 @@ def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) 
     simulation = Simulation(scene)
     simulation.run()
     metrics = wedge_metrics(simulation)
-    return {"problem": "wedging_2d", "knob": knob, "setting": label, "resolution": scene["mesh"]["resolution"],
+    return {"knob": knob, "setting": label, "resolution": scene["mesh"]["resolution"],
             "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
             "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
             "residual_force_A": metrics["residual_force_A"], "tilt_released_deg": metrics["tilt_released_deg"]}
@@ -97,22 +102,26 @@ def richardson(values: list[float], ratio: float) -> tuple[float, float]:
     return f3 + (f3 - f2) / (ratio ** order - 1), order
 
 
-def wedging_rows() -> tuple[list[dict], dict]:
+def wedging_rows() -> tuple[list[dict], list[str]]:
     wedging_case(0.35, "warm-up", "")
     resolutions = (0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8)
     rows = [wedging_case(r, f"resolution {r:g}", "mesh (P1)") for r in resolutions]
     rows += [wedging_case(None, f"preset {name}", "preset", [f"accuracy={name}"]) for name in PRESET_NAMES]
     finest = rows[len(resolutions) - 3: len(resolutions)]
-    reference = {}
+    notes = []
     for key in ("residual_force_A", "tilt_released_deg"):
-        reference[key], reference[f"{key}_order"] = richardson([r[key] for r in finest], 2.8 / 2.0)
-    for row in rows:
-        for key in ("residual_force_A", "tilt_released_deg"):
-            row[f"error_{key}"] = abs(row[key] / reference[key] - 1)
-    return rows, reference
+        reference, order = richardson([r[key] for r in finest], 2.8 / 2.0)
+        for row in rows:
+            row[f"error_{key}"] = abs(row[key] / reference - 1)
+        how = (f"Richardson extrapolation of resolutions 1.4, 2.0, 2.8 (observed order {order:.2f})"
+               if math.isfinite(order) and order > 0 else
+               f"the finest resolution, 2.8 (no Richardson: the three finest values do not converge "
+               f"monotonically, observed order {order:.2f})")
+        notes.append(f"Reference for {key}: {reference:.6g}, from {how}.")
+    return rows, notes
 
 
-def wedging_3d_rows() -> list[dict]:
+def wedging_3d_rows() -> tuple[list[dict], list[str]]:
     rows = []
     for resolution in (0.3, 0.4, 0.55, 0.75):
         out = (OUT / f"wedging_3d_{resolution:g}").resolve()
@@ -122,14 +131,47 @@ def wedging_3d_rows() -> list[dict]:
                         "--out", str(out), "--quiet"], check=False, env=LAUNCH_ENV)
         path = out / "result.json"
         result = json.loads(path.read_text()) if path.exists() else {"status": "no result", "info": {}, "metrics": {}}
-        rows.append({"problem": "wedging_3d", "knob": "mesh (P1, 2 ranks)", "setting": f"resolution {resolution:g}",
+        rows.append({"knob": "mesh (P1, 2 ranks)", "setting": f"resolution {resolution:g}",
                      "wall_time": time.perf_counter() - start, "status": result["status"],
                      "dofs": result["info"].get("dofs"), "resultant": result["metrics"].get("residual_force_A")})
     reference = rows[-1]["resultant"]
     for row in rows:
         ok = row["resultant"] is not None and reference
         row["error_resultant"] = abs(row["resultant"] / reference - 1) if ok else float("nan")
-    return rows
+    return rows, ["Reference for the resultant: the finest resolution, 0.75."]
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One problem of the study: `rows` is "module:function" returning (rows, notes); each row
+    has `knob`, `setting`, `wall_time` (s) and the `errors` columns (relative errors)."""
+
+    rows: str
+    errors: tuple[str, ...]
+    plots: tuple[tuple[str, str], ...]
+    """(error column, plot title) per Pareto plot."""
+    default: bool = True
+    """Measured by a plain `make accuracy`; otherwise only when named with `--problems`."""
+
+
+PROBLEMS = {
+    "hertz": Problem("femcontact.scenarios.accuracy:hertz_rows", ("error_a", "error_p0"),
+                     (("error_a", "Hertz: contact half-width a"), ("error_p0", "Hertz: peak pressure p0"))),
+    "wedging_2d": Problem("femcontact.scenarios.accuracy:wedging_rows",
+                          ("error_residual_force_A", "error_tilt_released_deg"),
+                          (("error_residual_force_A", "2-D wedging: residual force R_A after release"),)),
+    "wedging_3d": Problem("femcontact.scenarios.accuracy:wedging_3d_rows", ("error_resultant",),
+                          (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
+}
+
+
+def measure(name: str) -> tuple[list[dict], list[str]]:
+    """Rows and notes of one problem, each row tagged with the problem's name."""
+    module, function = PROBLEMS[name].rows.split(":")
+    rows, notes = getattr(importlib.import_module(module), function)()
+    for row in rows:
+        row["problem"] = name
+    return rows, notes
 
 
 def pareto_plot(rows: list[dict], error: str, title: str, path: Path) -> None:
@@ -163,58 +205,44 @@ def pareto_plot(rows: list[dict], error: str, title: str, path: Path) -> None:
     plt.close(fig)
 
 
-def markdown(rows: list[dict], reference: dict) -> str:
+def markdown(results: dict) -> str:
+    """The report: one table per measured problem, then its notes."""
     lines = ["# What accuracy costs in time", "",
              "Measured in one run of `make accuracy` (one process, forms compiled beforehand; wall time = mesh +",
              "forms + solve + measurement of the case).", ""]
-    sections = [("hertz", ["error_a", "error_p0"]), ("wedging_2d", ["error_residual_force_A",
-                                                                     "error_tilt_released_deg"]),
-                ("wedging_3d", ["error_resultant"])]
-    for problem, errors in sections:
-        selected = [r for r in rows if r["problem"] == problem]
-        if not selected:
-            continue
-        lines += [f"## {problem}", "", "| knob | setting | dofs | Newton its | wall time (s) | "
+    for name, (rows, notes) in results.items():
+        errors = PROBLEMS[name].errors
+        lines += [f"## {name}", "", "| knob | setting | dofs | Newton its | wall time (s) | "
                   + " | ".join(errors) + " |", "|---|---|---|---|---|" + "---|" * len(errors)]
-        for r in selected:
+        for r in rows:
             lines.append(f"| {r['knob']} | {r['setting']} | {r.get('dofs', '')} | {r.get('newton_iterations', '')} | "
                          f"{r['wall_time']:.2f} | " + " | ".join(f"{100 * r[e]:.3f} %" for e in errors) + " |")
-        lines.append("")
-    for key in ("residual_force_A", "tilt_released_deg"):
-        if key in reference:
-            order = reference[f"{key}_order"]
-            how = (f"Richardson extrapolation of resolutions 1.4, 2.0, 2.8 (observed order {order:.2f})"
-                   if math.isfinite(order) and order > 0 else
-                   f"the finest resolution, 2.8 (no Richardson: the three finest values do not converge "
-                   f"monotonically, observed order {order:.2f})")
-            lines.append(f"Wedging reference for {key}: {reference[key]:.6g}, from {how}.")
-    lines.append("")
+        lines += ["", *notes, ""]
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m femcontact.scenarios.accuracy", description=__doc__.splitlines()[0])
+    parser.add_argument("--problems", default=",".join(n for n, p in PROBLEMS.items() if p.default),
+                        help=f"comma-separated problems to measure, from {', '.join(PROBLEMS)} (default: %(default)s)")
     parser.add_argument("--with-3d", action="store_true", help="also the 3-D wedging case on 2 ranks")
     args = parser.parse_args(argv)
+    names = [n.strip() for n in args.problems.split(",") if n.strip()] + (["wedging_3d"] * args.with_3d)
+    unknown = [n for n in names if n not in PROBLEMS]
+    if unknown:
+        parser.error(f"--problems: unknown problem {unknown[0]!r}; known: {', '.join(PROBLEMS)}")
     OUT.mkdir(parents=True, exist_ok=True)
-    rows = hertz_rows()
-    print(markdown(rows, {}), flush=True)
-    wedging, reference = wedging_rows()
-    rows += wedging
-    if args.with_3d:
-        rows += wedging_3d_rows()
-    (OUT / "accuracy.json").write_text(json.dumps({"rows": rows, "wedging_reference": reference}, indent=1))
-    text = markdown(rows, reference)
+    results = {}
+    for name in dict.fromkeys(names):
+        results[name] = measure(name)
+        print(markdown({name: results[name]}), flush=True)
+        for error, title in PROBLEMS[name].plots:
+            pareto_plot(results[name][0], error, title, OUT / f"pareto_{name}_{error.removeprefix('error_')}.png")
+    (OUT / "accuracy.json").write_text(json.dumps({n: {"rows": r, "notes": t} for n, (r, t) in results.items()},
+                                                  indent=1))
+    text = markdown(results)
     (OUT / "accuracy.md").write_text(text)
-    pareto_plot([r for r in rows if r["problem"] == "hertz"], "error_a", "Hertz: contact half-width a", OUT / "pareto_hertz_a.png")
-    pareto_plot([r for r in rows if r["problem"] == "hertz"], "error_p0", "Hertz: peak pressure p0", OUT / "pareto_hertz_p0.png")
-    pareto_plot(wedging, "error_residual_force_A", "2-D wedging: residual force R_A after release",
-                OUT / "pareto_wedging_2d.png")
-    if args.with_3d:
-        pareto_plot([r for r in rows if r["problem"] == "wedging_3d"], "error_resultant",
-                    "3-D wedging: contact resultant after release", OUT / "pareto_wedging_3d.png")
-    print(text)
-    print(f"written: {OUT / 'accuracy.md'} and the Pareto plots in {OUT}/")
+    print(f"written: {OUT / 'accuracy.md'}, accuracy.json and the Pareto plots in {OUT}/")
     return 0
 
 

@@ -11,6 +11,8 @@
 3. The Hertz scene at about 10k dofs with each effect switched on in turn: time per
    increment as a ratio to the frictionless quasi-static scene (an effect not named
    costs nothing), and the thesis wedging scene at about 10k dofs.
+4. The study runner's overhead per one-rank case, fresh processes against warm workers
+   (runner_overhead.py).
 The goals of issue 12 are stated as ratios measured in this run. Writes results/bench/bench.md
 and bench.json; timings are ratios within this run (a loaded machine inflates them all).
 """
@@ -24,7 +26,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_half_width
-from femcontact.scenarios import hertz
+from femcontact.scenarios import hertz, runner_overhead
 from femcontact.config.scene import resolve
 from femcontact.solver.stepping import Simulation
 
@@ -268,9 +270,11 @@ def main() -> None:
     wedging = wedging_default()
     hertz_rows = hertz_table()
     effects_rows = effect_costs()
+    overhead = runner_overhead.measure(OUT / "runner")
     (OUT / "bench.json").write_text(json.dumps({"hertz_codes": codes, "getfem_skipped": skipped, "wedging": wedging,
-                                                "hertz": hertz_rows, "effects": effects_rows}, indent=1))
-    text = markdown(hertz_rows, effects_rows, codes, skipped, wedging)
+                                                "hertz": hertz_rows, "effects": effects_rows,
+                                                "runner_overhead": overhead}, indent=1))
+    text = markdown(hertz_rows, effects_rows, codes, skipped, wedging) + "\n" + runner_overhead.markdown(overhead)
     (OUT / "bench.md").write_text(text)
     print(text)
     print(f"written: {OUT / 'bench.md'}")

@@ -9,9 +9,11 @@ exists (written atomically by `femcontact run`, or by this runner for a case
 that timed out or crashed without one).
 
 Cases run as subprocesses through the study's launcher (`mpirun -n {ranks}` by
-default, `srun -n {ranks}` under SLURM), `jobs` at a time. Each job slot has its
-own FFCx JIT cache (`XDG_CACHE_HOME`), so concurrent first compilations never
-contend for the same cache locks. See docs/studies.md.
+default, `srun -n {ranks}` under SLURM), `jobs` at a time; one-rank cases under the
+default launcher run in warm worker processes instead, one per job slot, each paying
+the start-up once (workers.py). Each job slot has its own FFCx JIT cache
+(`XDG_CACHE_HOME`), so concurrent first compilations never contend for the same cache
+locks. See docs/studies.md.
 """
 import ctypes
 import functools
@@ -30,6 +32,7 @@ from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.study.workers import Pool, Worker
 
 _TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
 _TABLES = Field("any", [], "an array of tables",
@@ -49,6 +52,8 @@ SCHEMA = {
         "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
                           check=lambda v: _check_launcher(v)),
         "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
+        "workers": Field("bool", True, "one-rank cases under the default launcher run in warm worker processes "
+                         "(one per job, importing femcontact once); false: a fresh launcher process per case"),
     },
     "scene": _TABLE,
     "sweep": {
@@ -338,6 +343,11 @@ class Job:
     slot: int
     started: float
     killed: str | None = None
+    worker: Worker | None = None  # the warm worker running it, if any (then `process` is the worker's)
+
+    def exit_code(self) -> int | None:
+        """The case's exit code once it is over, else None."""
+        return self.worker.poll() if self.worker else self.process.poll()
 
 
 def _die_with_parent(parent: int) -> None:
@@ -363,12 +373,17 @@ def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> N
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
     """The command that runs `case` in its directory: LAUNCHER FEMCONTACT run scene.toml ..."""
-    command = shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + ["run", "scene.toml", "--out", "."]
+    return shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + run_arguments(case)
+
+
+def run_arguments(case: Case) -> list[str]:
+    """The `femcontact` arguments that run `case` in its directory: run scene.toml --out . ..."""
+    arguments = ["run", "scene.toml", "--out", "."]
     if case.prefix is not None:
-        command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+        arguments += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
     elif case.is_prefix:
-        command += ["--checkpoint"]
-    return command
+        arguments += ["--checkpoint"]
+    return arguments
 
 
 class Runner:
@@ -382,21 +397,36 @@ class Runner:
         self.cache_root = cache / "femcontact-jit"
         self.running: list[Job] = []
         remove_unfinished_compilations(self.cache_root)
+        settings = study.settings
+        warm = settings["workers"] and ranks == 1 and settings["launcher"] == SCHEMA["study"]["launcher"].default
+        self.pool = Pool(self.environment, functools.partial(_die_with_parent, os.getpid())) if warm else None
+
+    def environment(self, slot: int) -> dict:
+        return launch_environment(self.cache_root / f"slot-{slot}")
 
     def command(self, case: Case) -> list[str]:
+        if self.pool is not None:  # what the worker runs, as a fresh process would
+            return femcontact_command() + run_arguments(case)
         return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
         make_dir(case.dir)
         command = self.command(case)
+        worker = self.pool.worker(slot) if self.pool is not None else None
         try:
             (case.dir / "result.json").unlink(missing_ok=True)
             write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
             write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                                         "slot": slot, "started": time.time()})
+                                                         "slot": slot, "worker": worker and worker.pid,
+                                                         "started": time.time()})
             log = open(case.dir / "log.txt", "wb")
         except OSError as error:
             raise WriteError(describe(error, case.dir)) from None
+        if worker is not None:  # the worker appends to the log just emptied
+            log.close()
+            worker.submit(case.dir.resolve(), run_arguments(case))
+            self.running.append(Job(case, worker.process, slot, time.monotonic(), worker=worker))
+            return
         with log:
             try:
                 process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
@@ -412,7 +442,8 @@ class Runner:
         finished, limit = [], self.study.settings["time_limit"]
         for job in list(self.running):
             elapsed = time.monotonic() - job.started
-            if job.process.poll() is None:
+            code = job.exit_code()
+            if code is None:
                 if elapsed > limit and not job.killed:
                     job.killed = f"time limit of {limit:g} s exceeded"
                     _signal_group(job.process, signal.SIGTERM)
@@ -422,7 +453,7 @@ class Runner:
             self.running.remove(job)
             result = read_result(job.case.dir) if not job.killed else None
             if result is None:  # killed, crashed or exited without a result: the runner records why
-                reason = job.killed or _exit_reason(job.process.returncode, job.case.dir / "log.txt")
+                reason = job.killed or _exit_reason(code, job.case.dir / "log.txt")
                 result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
                           "info": {"ranks": self.ranks}}
                 write_json_atomic(job.case.dir / "result.json", result)
@@ -443,6 +474,11 @@ class Runner:
                 _signal_group(job.process, signal.SIGKILL)
                 job.process.wait()
         self.running.clear()
+        self.close_workers()
+
+    def close_workers(self) -> None:
+        if self.pool is not None:
+            self.pool.close()
 
     def run(self, cases: list[Case], prefixes: list[Case]) -> None:
         """Run the prefixes and cases; a case whose prefix failed is recorded failed without running."""
@@ -478,6 +514,7 @@ class Runner:
                     self._finish(case, result)
             self.progress.update(self.running)
             time.sleep(0.02)
+        self.close_workers()
 
     def _finish(self, case: Case, result: dict) -> None:
         self.database.record(case)
