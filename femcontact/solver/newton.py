@@ -124,7 +124,8 @@ class SchurNewton:
         p = self.problem
         if self._assembled is not None:
             at, u, r, residual = self._assembled
-            if at is load and np.array_equal(u, p.u.x.array) and np.array_equal(r, p.rigid.values):
+            here = at is load and np.array_equal(u, p.u.x.array) and np.array_equal(r, p.rigid.values)
+            if p.mesh.comm.allreduce(here, op=MPI.LAND):  # every rank decides alike (assembly is collective)
                 return residual
         return self.assemble_residual(load)
 
