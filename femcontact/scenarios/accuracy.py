@@ -160,6 +160,10 @@ PROBLEMS = {
     "wedging_2d": Problem("femcontact.scenarios.accuracy:wedging_rows",
                           ("error_residual_force_A", "error_tilt_released_deg"),
                           (("error_residual_force_A", "2-D wedging: residual force R_A after release"),)),
+    "snap_fit": Problem("femcontact.scenarios.snap_fit:accuracy_rows",
+                        ("error_peak_insertion_force", "error_insertion_force_ratio"),
+                        (("error_peak_insertion_force", "Snap fit (2-D): peak insertion force"),
+                         ("error_insertion_force_ratio", "Snap fit (2-D): insertion force ratio against statics"))),
     "wedging_3d": Problem("femcontact.scenarios.accuracy:wedging_3d_rows", ("error_resultant",),
                           (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
 }
