@@ -94,7 +94,10 @@ def write_json_atomic(path, data) -> Path:
 def remove_stale_compilations(directory: Path, older_than: float) -> None:
     """Delete JIT sources (and their ready marks) of FFCx's cache `directory` whose compiled
     module is missing and that are older than `older_than` seconds: a process killed while
-    compiling leaves them, and every later run would wait for that compilation and time out."""
+    compiling leaves them, and every later run would wait for that compilation and time out.
+    Also delete, at any age, a ready mark whose source is gone (left when a source was deleted
+    mid-compilation): FFCx would write the source again, compile it, then fail to create the
+    mark that already exists."""
     import time
 
     try:
@@ -112,3 +115,5 @@ def remove_stale_compilations(directory: Path, older_than: float) -> None:
             if stale:
                 source.unlink(missing_ok=True)
                 source.with_suffix(".c.cached").unlink(missing_ok=True)
+        elif name.endswith(".c.cached") and name.removesuffix(".cached") not in names:
+            source.unlink(missing_ok=True)

@@ -50,11 +50,11 @@ class DynamicNewton(SchurNewton):
     M/dt^2 makes S regular, so a body out of contact moves in one step (the quasi-static
     trust region of one contact element per step is kept for bodies without inertia)."""
 
-    def _rigid_step(self, S_ff, rhs) -> np.ndarray:
+    def _rigid_step(self, S_ff, rhs, shifted: bool = False) -> np.ndarray:
         inertia = inertia_of(self.problem)
         if inertia is not None and inertia.active:
             return np.linalg.solve(S_ff, rhs)
-        return super()._rigid_step(S_ff, rhs)
+        return super()._rigid_step(S_ff, rhs, shifted)
 
     def roundoff(self) -> float:
         """The quasi-static round-off floor plus that of the inertia term M (q1 - q0) / dt^2 (N,

@@ -12,10 +12,12 @@ Cases run as subprocesses through the study's launcher (`mpirun -n {ranks}` by
 default, `srun -n {ranks}` under SLURM), `jobs` at a time; one-rank cases under the
 default launcher run in warm worker processes instead, one per job slot, each paying
 the start-up once (workers.py). Each job slot has its own FFCx JIT cache
-(`XDG_CACHE_HOME`), so concurrent first compilations never contend for the same cache
-locks. See docs/studies.md.
+(`XDG_CACHE_HOME`), held with a file lock for the runner's lifetime, so concurrent first
+compilations never contend for the same cache, even between two studies run at once.
+See docs/studies.md.
 """
 import ctypes
+import fcntl
 import functools
 import itertools
 import json
@@ -363,12 +365,23 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
 
 
-def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Clean the job slots' JIT caches (see femcontact.io.remove_stale_compilations). Safe at
-    any age here: the runner holds the study lock and its job slots' caches are its own (a
-    SLURM task cleans only the slot it holds)."""
-    for directory in cache_root.glob(f"{slots}/fenics"):
-        remove_stale_compilations(directory, older_than=0.0)
+def take_slot(cache_root: Path, kind: str = "slot"):
+    """The first JIT cache slot `KIND-K` that no other runner or SLURM task on this file system
+    holds: (its name, the open lock file, held until closed or the process ends)."""
+    cache_root.mkdir(parents=True, exist_ok=True)
+    for number in itertools.count():
+        lock = open(cache_root / f"{kind}-{number}.lock", "w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return f"{kind}-{number}", lock
+        except BlockingIOError:
+            lock.close()
+
+
+def remove_unfinished_compilations(cache_root: Path, slot: str) -> None:
+    """Clean a held job slot's JIT cache (see femcontact.io.remove_stale_compilations). Safe at
+    any age: the slot's lock makes its cache this process's own."""
+    remove_stale_compilations(cache_root / slot / "fenics", older_than=0.0)
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
@@ -396,13 +409,16 @@ class Runner:
         cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
         self.cache_root = cache / "femcontact-jit"
         self.running: list[Job] = []
-        remove_unfinished_compilations(self.cache_root)
+        self.slots = [take_slot(self.cache_root) for _ in range(jobs)]  # (name, lock) per job slot
+        for name, _ in self.slots:
+            remove_unfinished_compilations(self.cache_root, name)
         settings = study.settings
         warm = settings["workers"] and ranks == 1 and settings["launcher"] == SCHEMA["study"]["launcher"].default
         self.pool = Pool(self.environment, functools.partial(_die_with_parent, os.getpid())) if warm else None
 
     def environment(self, slot: int) -> dict:
-        return launch_environment(self.cache_root / f"slot-{slot}")
+        """The environment of job slot `slot`'s processes: its own JIT cache."""
+        return launch_environment(self.cache_root / self.slots[slot][0])
 
     def command(self, case: Case) -> list[str]:
         if self.pool is not None:  # what the worker runs, as a fresh process would
@@ -430,7 +446,7 @@ class Runner:
         with log:
             try:
                 process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
-                                           env=launch_environment(self.cache_root / f"slot-{slot}"),
+                                           env=self.environment(slot),
                                            stdin=subprocess.DEVNULL, start_new_session=True,
                                            preexec_fn=functools.partial(_die_with_parent, os.getpid()))
             except OSError as error:

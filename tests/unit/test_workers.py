@@ -160,11 +160,24 @@ def test_clean_up_restores_petsc_options_and_ufl_counters():
 def test_stale_compilations_are_removed_and_compiled_ones_kept(tmp_path):
     """femcontact run's JIT cache clean-up (one directory listing for the whole cache)."""
     names = ["a.c", "a.c.cached", "a.cpython-311-x86_64-linux-gnu.so", "b.c", "b.so", "c.c", "c.c.cached",
-             "d.c", "d.c.cached"]
+             "e.c.cached", "e.so", "d.c", "d.c.cached"]
     for name in names:
         (tmp_path / name).write_text("")
     old = time.time() - 3600
     for name in names[:-2]:
         os.utime(tmp_path / name, (old, old))
     remove_stale_compilations(tmp_path, older_than=600)
-    assert sorted(path.name for path in tmp_path.iterdir()) == sorted(set(names) - {"c.c", "c.c.cached"})
+    assert sorted(path.name for path in tmp_path.iterdir()) == sorted(set(names) - {"c.c", "c.c.cached",
+                                                                                  "e.c.cached"})
+
+
+def test_two_runners_never_share_a_job_slot(tmp_path):
+    """Two studies run at once: each runner holds its slots' JIT caches (file locks), so one never
+    cleans the other's compilation in progress."""
+    from femcontact.study.runner import take_slot
+
+    first = [take_slot(tmp_path) for _ in range(2)]
+    second = [take_slot(tmp_path) for _ in range(2)]
+    assert [name for name, _ in first + second] == ["slot-0", "slot-1", "slot-2", "slot-3"]
+    first[0][1].close()
+    assert take_slot(tmp_path)[0] == "slot-0"
