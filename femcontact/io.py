@@ -94,14 +94,26 @@ def write_json_atomic(path, data) -> Path:
 def remove_stale_compilations(directory: Path, older_than: float) -> None:
     """Delete JIT sources (and their ready marks) of FFCx's cache `directory` whose compiled
     module is missing and that are older than `older_than` seconds: a process killed while
-    compiling leaves them, and every later run would wait for that compilation and time out."""
+    compiling leaves them, and every later run would wait for that compilation and time out.
+    Also delete, at any age, a ready mark whose source is gone (left when a source was deleted
+    mid-compilation): FFCx would write the source again, compile it, then fail to create the
+    mark that already exists."""
     import time
 
-    for source in Path(directory).glob("*.c"):
-        try:
-            stale = time.time() - source.stat().st_mtime >= older_than
-        except FileNotFoundError:
-            continue
-        if stale and not list(source.parent.glob(source.stem + ".*.so")) and not source.with_suffix(".so").exists():
+    try:
+        names = os.listdir(directory)  # once: a cache holds thousands of files
+    except FileNotFoundError:
+        return
+    compiled = {name[:i] for name in names if name.endswith(".so") for i, c in enumerate(name) if c == "."}
+    for name in names:
+        source = Path(directory, name)
+        if name.endswith(".c") and source.stem not in compiled:  # no STEM.so nor STEM.*.so
+            try:
+                stale = time.time() - source.stat().st_mtime >= older_than
+            except FileNotFoundError:
+                continue
+            if stale:
+                source.unlink(missing_ok=True)
+                source.with_suffix(".c.cached").unlink(missing_ok=True)
+        elif name.endswith(".c.cached") and name.removesuffix(".cached") not in names:
             source.unlink(missing_ok=True)
-            source.with_suffix(".c.cached").unlink(missing_ok=True)

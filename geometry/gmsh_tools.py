@@ -68,6 +68,17 @@ def start(name: str) -> None:
     gmsh.model.add(name)
 
 
+def reset() -> None:
+    """End this process's gmsh session, if one was started: the next start() begins a new one with
+    gmsh's default options (a study's warm worker calls this between cases)."""
+    global _initialized
+    if _initialized:
+        import gmsh
+
+        gmsh.finalize()
+        _initialized = False
+
+
 def polygon(vertices, edges) -> tuple[int, list[tuple[str | None, bool, int]]]:
     """Plane surface (built-in kernel) bounded by the closed polygon `vertices` [(x, y)];
     edges[i] = (name or None, fine) describes the edge from vertex i to vertex i + 1.

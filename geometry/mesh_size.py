@@ -59,9 +59,10 @@ def _body(scene: dict, sz):
                 0.0
         return volume, lambda d: block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0  # a strip |x| <= z
     if scene["geometry"] == "snap_fit":  # a disc of radius z around each spring's apex, a quarter inside
-        spring = scene["spring"]
-        measure = spring["count"] * (spring["length"] * spring["thickness"] + spring["pad_height"] ** 2 / 2)
-        return measure, lambda d: spring["count"] * math.pi * (z + d) ** 2 / 4, -z
+        spring = scene["spring"]          # (3-D: swept across the width)
+        depth = 1.0 if dim == 2 else spring["width"]
+        measure = spring["count"] * (spring["length"] * spring["thickness"] + spring["pad_height"] ** 2 / 2) * depth
+        return measure, lambda d: spring["count"] * math.pi * (z + d) ** 2 / 4 * depth, -z
     peg, hole = scene["peg"], scene["hole"]
     D, bw, depth, bt = hole["width"], hole["block_width"], hole["depth"], hole["bottom_thickness"]
     if scene["rigid"] == "peg":

@@ -1,4 +1,4 @@
-"""Compliant part mating (Whitney ch. 11): a rigid pin between cantilever contact springs (2-D).
+"""Compliant part mating (Whitney ch. 11): a rigid pin between cantilever contact springs.
 
 Frame: the pin's axis is the y axis and the pin moves down (-y) to insert. Spring B (and,
 with `spring.count = 2`, its mirror A at x < 0) is a cantilever of length L and thickness h
@@ -15,6 +15,10 @@ shank radius w at z = H: a flat taper, a convex or a concave circular arc (both 
 same two points as the taper of chord angle `nose_angle`; the convex arc is tangent to the
 shank, the concave one to the axis at the tip), or a polyline through `nose_points`.
 `nose_profile` returns the right half of the outline as straight segments and arcs.
+
+3-D (`dim = 3`): each spring is its 2-D outline swept across its width, z in [-width/2,
+width/2]; the pin is a blade, its outline swept along z without end (wider than the springs):
+the same pin section in every plane z = const.
 """
 import math
 from dataclasses import dataclass
@@ -161,39 +165,49 @@ def layout(scene: dict) -> Layout:
 
 def rigid_body(scene: dict) -> dict:
     """The pin: its outline pieces, placed with its tip centre at (0, tip_y)."""
-    nose, place = nose_profile(scene["peg"]), layout(scene)
+    nose, place, dim = nose_profile(scene["peg"]), layout(scene), scene["dim"]
     return {"shape": "pin", "nose": nose.kind, "half_width": nose.half_width, "length": nose.pin_length,
             "nose_length": nose.length, "pieces": nose.pieces, "corner_radius": 0.0, "chamfer_width": 0.0,
-            "origin": np.array([0.0, place.tip_y]), "rotation": np.eye(2), "tilt": 0.0}
+            "origin": np.array([0.0, place.tip_y, 0.0][:dim]), "rotation": np.eye(dim), "tilt": 0.0}
 
 
 def points(scene: dict) -> dict:
-    """Named points (mm): the pin's tip centre and top, each spring's apex."""
-    place, pin_length = layout(scene), scene["peg"]["length"]
-    out = {"peg_tip": np.array([0.0, place.tip_y]), "peg_top": np.array([0.0, place.tip_y + pin_length]),
-           "apex_B": np.array(place.apex)}
+    """Named points (mm): the pin's tip centre and top, each spring's apex (3-D: mid-width, z = 0)."""
+    place, pin_length, dim = layout(scene), scene["peg"]["length"], scene["dim"]
+    out = {"peg_tip": [0.0, place.tip_y], "peg_top": [0.0, place.tip_y + pin_length], "apex_B": list(place.apex)}
     if scene["spring"]["count"] == 2:
-        out["apex_A"] = np.array([-place.apex[0], place.apex[1]])
-    return out
+        out["apex_A"] = [-place.apex[0], place.apex[1]]
+    return {name: np.array(point + [0.0] * (dim - 2)) for name, point in out.items()}
 
 
 def sizes(scene: dict):
-    """Defaults from the spring thickness h: contact size h/8, max size h/3, zone = the pad height."""
+    """Defaults from the spring thickness h: contact size h/8, max size h/3 (2-D) or h/4 and h/2
+    (3-D), zone = the pad height."""
     from geometry import gmsh_tools
 
     h = scene["spring"]["thickness"]
-    return gmsh_tools.sizes(scene["mesh"], h / 8, h / 3, scene["spring"]["pad_height"])
+    contact, largest = (h / 8, h / 3) if scene["dim"] == 2 else (h / 4, h / 2)
+    return gmsh_tools.sizes(scene["mesh"], contact, largest, scene["spring"]["pad_height"])
+
+
+def layers(scene: dict, sz) -> int:
+    """3-D: element layers across the spring's width (the 2-D mesh extruded), about 2 h_max thick."""
+    return max(2, math.ceil(scene["spring"]["width"] / (2 * sz.h_max)))
 
 
 def generate(scene: dict, sz) -> dict:
-    """Mesh the spring(s) (current gmsh model, this rank only); returns the tag names."""
+    """Mesh the spring(s) (current gmsh model, this rank only); returns the tag names. 3-D: the
+    2-D mesh of each spring's outline at z = -width/2 is extruded across the width
+    (`layers(scene, sz)` layers of prisms, each split into tetrahedra); the facets keep the
+    names of the outline's edges they are swept from."""
     import gmsh
 
     from geometry import gmsh_tools
 
-    spring = scene["spring"]
-    L, h, b = spring["length"], spring["thickness"], spring["pad_height"]
+    spring, dim = scene["spring"], scene["dim"]
+    L, h, b, width = spring["length"], spring["thickness"], spring["pad_height"], spring["width"]
     a = layout(scene).inner
+    z0 = 0.0 if dim == 2 else -width / 2
     lines, surfaces, fields = {}, {}, []
     for s, label in ((1, "B"), (-1, "A"))[: spring["count"]]:
         # counter-clockwise for B; the mirror is walked the other way round
@@ -204,15 +218,22 @@ def generate(scene: dict, sz) -> dict:
             vertices = [(-x, y) for x, y in reversed(vertices)]
             edges = [edges[(len(edges) - 2 - k) % len(edges)] for k in range(len(edges))]
         surface, tagged = gmsh_tools.polygon(vertices, edges)
-        surfaces[f"spring_{label}"] = [surface]
-        for name, _, tag in tagged:
-            lines.setdefault(name, []).append(tag)
-        fields.append(gmsh_tools.ball_size(sz, (s * (a - b), L, 0.0), sz.zone))
+        fields.append(gmsh_tools.ball_size(sz, (s * (a - b), L, z0), sz.zone))
+        if dim == 2:
+            surfaces[f"spring_{label}"] = [surface]
+            for name, _, tag in tagged:
+                lines.setdefault(name, []).append(tag)
+            continue
+        gmsh.model.geo.translate([(2, surface)], 0.0, 0.0, z0)
+        swept = gmsh.model.geo.extrude([(2, surface)], 0.0, 0.0, width, numElements=[layers(scene, sz)])
+        surfaces[f"spring_{label}"] = [swept[1][1]]  # (top, volume, one side per edge in order)
+        for (name, _, _), side in zip(tagged, swept[2:]):
+            lines.setdefault(name, []).append(side[1])
     gmsh.model.geo.synchronize()
     gmsh_tools.background(fields)
     gmsh.option.setNumber("Mesh.Algorithm", 6)
-    cells = gmsh_tools.add_groups(2, surfaces)
-    facets = gmsh_tools.add_groups(1, {name: lines[name] for name in sorted(lines)})
-    gmsh.model.mesh.generate(2)
+    cells = gmsh_tools.add_groups(dim, surfaces)
+    facets = gmsh_tools.add_groups(dim - 1, {name: lines[name] for name in sorted(lines)})
+    gmsh.model.mesh.generate(dim)
     return {"facets": facets, "cells": cells, "contact_facets": [n for n in facets if n.startswith("contact")],
             "supports": [n for n in facets if n.startswith("root")]}

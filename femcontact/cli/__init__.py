@@ -26,12 +26,16 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 """One BLAS/OpenMP thread per MPI rank unless the user set them: ranks, not threads, use the cores."""
 
 
+def _warnings_and_errors(record: logging.LogRecord) -> bool:
+    return record.levelno >= logging.WARNING
+
+
 def main(argv=None) -> int:
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
     # FFCx's JIT compiles through setuptools, which logs every compiler call at INFO on the root
     # logger: keep warnings and errors only, so a run's output is its progress
-    logging.getLogger().addFilter(lambda record: record.levelno >= logging.WARNING)
+    logging.getLogger().addFilter(_warnings_and_errors)  # once per process, however often main() runs
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = argparse.ArgumentParser(prog="femcontact", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

@@ -98,6 +98,7 @@ def command(args) -> int:
     timings = {"startup": startup, **simulation.timings, "postprocess": post, "total": time.perf_counter() - START}
     result = {"contact_size": args.contact_size, "degree": args.degree, "ranks": comm.size, "dofs": simulation.dofs,
               "newton_iterations": sum(row["newton_iterations"] for row in simulation.history),
+              "newton_per_increment": [row["newton_iterations"] for row in simulation.history],
               "increments": len(simulation.history), "a": measured["a"], "p0": measured["p0"],
               "error_a": measured["a"] / a - 1, "error_p0": measured["p0"] / p0 - 1,
               "timings": timings, "surface": nodes}

@@ -22,6 +22,7 @@ from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic
 
 STALE_COMPILATION_AGE = 600.0  # s; a form compiles in well under a minute
+_CLEANED_CACHES = set()  # JIT caches this process has cleaned (a study's warm worker runs many cases)
 
 
 def add_arguments(parser):
@@ -64,8 +65,12 @@ def command(args) -> int:
 
     comm = MPI.COMM_WORLD
     check_restart(scene, args.checkpoint, args.restart, comm.size)
-    if comm.rank == 0:  # a compilation unfinished for 10 minutes was killed: FFCx would wait for it forever
-        remove_stale_compilations(jit_cache(), older_than=STALE_COMPILATION_AGE)
+    cache = jit_cache()
+    if comm.rank == 0 and cache not in _CLEANED_CACHES:
+        # a compilation unfinished for 10 minutes was killed: FFCx would wait for it forever (once per
+        # process: a compilation of this process's own finishes or takes the process with it)
+        remove_stale_compilations(cache, older_than=STALE_COMPILATION_AGE)
+        _CLEANED_CACHES.add(cache)
     case_dir = Path(args.out or Path("results", "run", case_id(scene)))
     problem = None
     if comm.rank == 0:

@@ -39,8 +39,9 @@ def scene_page() -> str:
          "[`scenes/wedging_moment_2d.toml`](../scenes/wedging_moment_2d.toml) (a couple, then release)."),
         ("## Contact scene, geometry = block (keys that differ)", block,
          "Example: [`scenes/hertz.toml`](../scenes/hertz.toml)."),
-        ("## Contact scene, geometry = snap_fit (keys that differ; 2-D)", snap,
-         "Example: [`scenes/snap_fit_2d.toml`](../scenes/snap_fit_2d.toml) (insert, then withdraw); "
+        ("## Contact scene, geometry = snap_fit (keys that differ; 2-D, or 3-D with a blade pin)", snap,
+         "Examples: [`scenes/snap_fit_2d.toml`](../scenes/snap_fit_2d.toml) (insert, then withdraw) and "
+         "[`scenes/snap_fit_3d.toml`](../scenes/snap_fit_3d.toml) (3-D, one spring); "
          "see [snap_fit.md](snap_fit.md)."),
         ("## RCC scene (kind = rcc)", describe(RCC_SCHEMA), "Example: [`scenes/rcc.toml`](../scenes/rcc.toml)."),
     ]

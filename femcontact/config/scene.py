@@ -98,7 +98,8 @@ SPRING = {
     "length": Field("float", 5.0, "cantilever length L, root to free end (mm)", positive=True),
     "thickness": Field("float", 0.3, "cantilever thickness h in the plane of bending (mm)", positive=True),
     "width": Field("float", 1.0, "out-of-plane width of spring and pin (mm): the plane-stress thickness; the 2-D "
-                   "history is per mm of width, the snap-fit metrics (N) are multiplied by it", positive=True),
+                   "history is per mm of width, the snap-fit metrics (N) are multiplied by it; 3-D: the spring's "
+                   "width, meshed (the pin is a blade without ends)", positive=True),
     "pad_height": Field("float", 0.3, "how far the contact pad at the free end reaches in from the spring (mm)",
                         positive=True),
     "interference": Field("float", 0.15, "lateral overlap of the pad's apex with the pin's shank (mm): the spring's "
@@ -179,6 +180,10 @@ SOLVER = {
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
     "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
                          "root of R.d or backtracking"),
+    "predictor": Field("str", "none", "initial guess of an increment: 'none' (the last converged state) or "
+                       "'extrapolate' (plus the last increment's displacement change, scaled by dt, within a step): "
+                       "a contact that opens under prescribed motion (a withdrawal) then starts closed",
+                       choices=("none", "extrapolate")),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }
@@ -279,8 +284,6 @@ def _check_contact(scene: dict) -> None:
 
         check_peg_in_hole(scene)
     if scene["geometry"] == "snap_fit":
-        if dim != 2:
-            raise InputError(f"dim = {dim}: geometry 'snap_fit' is 2-D only")
         if scene["peg"]["nose"] == "points" and not scene["peg"]["nose_points"]:
             raise InputError("peg.nose_points: missing (required for peg.nose = 'points')")
         snap_fit_geometry.layout(scene)  # refuses a spring that cannot meet the nose

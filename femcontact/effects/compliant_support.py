@@ -126,7 +126,8 @@ class CompliantSupport(Effect):
 
     def outputs(self) -> dict:
         """The support's wrench on the peg at C (support_F*, support_M*), the gripper's motion
-        (gripper_*) and the compliance centre's deflection from it (support_q*)."""
+        (gripper_*), the compliance centre's deflection from it (support_q*), the tip centre
+        (tip_*, mm) and in 3-D the peg's tilt in the x-z plane (tilt_xz_deg, signed as in 2-D)."""
         rigid, d = self.problem.rigid, self.dim
         q = self.deflection(rigid.values, self.motion)
         w = -self.K @ q
@@ -137,6 +138,9 @@ class CompliantSupport(Effect):
         row.update({f"support_q{name}": float(v) for name, v in zip(rigid.names, q)})
         tip = rigid.place(np.zeros(d), rigid.values)
         row.update({f"tip_{a}": float(tip[k]) for k, a in enumerate(axes)})
+        if d == 3:  # the tilt in the x-z plane, signed as in 2-D (top towards -x positive)
+            axis = rigid.place(np.eye(3)[2], rigid.values) - tip
+            row["tilt_xz_deg"] = float(np.degrees(np.arctan2(-axis[0], axis[2])))
         return row
 
     def load_scale(self) -> float:

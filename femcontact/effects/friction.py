@@ -11,6 +11,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
@@ -44,27 +45,65 @@ class Friction(Effect):
         self.stick = ufl.conditional(ufl.And(touching, ufl.lt(size, bound)), 1.0, 0.0)
         self.slip = ufl.conditional(ufl.And(touching, ufl.ge(size, bound)), 1.0, 0.0)
         problem.add_traction(tangential)
-        v = ufl.TestFunction(problem.V)
+        v, w = ufl.TestFunction(problem.V), ufl.TrialFunction(problem.V)
         self.area_form = fem.form(sum(v[k] for k in range(problem.dim)) * problem.ds_contact)
+        # L2 projection onto the contact trace, for elements whose lumped areas vanish (P2 facets
+        # in 3-D: a quadratic triangle's vertex functions integrate to zero); the tiny volume term
+        # (relative 1e-10 per element size) only makes the matrix regular off the contact facets
+        size = problem.model.h_contact
+        self.projection_form = fem.form(ufl.inner(w, v) * problem.ds_contact + 1e-10 * size * ufl.inner(w, v) * problem.dx)
+        self.projection = None
 
     def commit(self, dt: float) -> None:
         """Move each node's anchor so that -gamma_T (xi - anchor) equals the converged
         tangential traction: anchor = xi + R^T t / gamma_T. The traction per node is its
-        contact force (integral terms only) over its lumped contact area."""
+        contact force (integral terms only) over its lumped contact area; where some contact
+        node's lumped area vanishes (P2 in 3-D), the L2 projection of the contact force on the
+        contact trace instead (`_projected_traction`)."""
         p = self.problem
-        vectors = []
+        vectors, force_vector = [], None
         for form in (p.forms.residual_contact, self.area_form):
             vector = petsc.assemble_vector(form)
             vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             with vector.localForm() as local:
                 vectors.append(local.array.reshape(-1, p.dim).copy())
-            vector.destroy()
+            if force_vector is None:
+                force_vector = vector
+            else:
+                vector.destroy()
         force, weight = vectors[0], vectors[1][:, :1]
-        traction = np.where(weight > 0, -force / np.where(weight > 0, weight, 1.0), 0.0)
+        if self.projection is None:  # decided once: the lumped areas depend only on the mesh
+            largest = p.mesh.comm.allreduce(float(np.abs(weight).max(initial=0.0)), op=MPI.MAX)
+            degenerate = np.any((weight != 0) & (np.abs(weight) < 1e-9 * largest))
+            self.projection = bool(p.mesh.comm.allreduce(degenerate, op=MPI.LOR))
+        if self.projection:
+            traction = self._projected_traction(force_vector)
+        else:
+            traction = np.where(weight > 0, -force / np.where(weight > 0, weight, 1.0), 0.0)
+        force_vector.destroy()
         R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0
         gamma_t = float(p.constants["gamma_t"].value * p.constants["E"].value) / p.model.h_contact
         self.anchor.x.array[:] = (p.local_coordinates() + traction @ R / gamma_t).reshape(-1)
+
+    def _projected_traction(self, force_vector) -> np.ndarray:
+        """Nodal traction t (MPa, local and ghost nodes) with M t = -f, M the contact trace's mass matrix."""
+        p = self.problem
+        matrix = petsc.assemble_matrix(self.projection_form)
+        matrix.assemble()
+        ksp = PETSc.KSP().create(p.mesh.comm)
+        ksp.setOperators(matrix)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        solution = force_vector.duplicate()
+        ksp.solve(force_vector, solution)
+        solution.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        with solution.localForm() as local:
+            traction = -local.array.reshape(-1, p.dim).copy()
+        for item in (ksp, matrix, solution):
+            item.destroy()
+        return traction
 
     def state(self) -> dict:
         return {"anchor": self.anchor.x.array.copy()}

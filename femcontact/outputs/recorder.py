@@ -85,7 +85,7 @@ class Recorder:
         for k, axis in enumerate("xyz"[:dim]):
             row[f"applied_F{axis}"] = float(load.force[k])
 
-        R_u, _, _ = newton.assemble_residual(load)
+        R_u, _, _ = newton.current_residual(load)  # and newton.b_bulk, b_contact there
         full = newton.b_bulk.array_r + newton.b_contact.array_r
         full = full.reshape(-1, dim)
         x = newton.coordinates + p.u.x.array[: newton.n_owned * dim].reshape(-1, dim)

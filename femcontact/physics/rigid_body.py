@@ -32,8 +32,13 @@ def mass_properties(rigid: dict, density: float, dim: int):
         x, y = outline(rigid)[:, :2].T
         cross = x[:-1] * y[1:] - x[1:] * y[:-1]
         area = cross.sum() / 2
-        polar = (cross * (x[:-1] ** 2 + x[:-1] * x[1:] + x[1:] ** 2 + y[:-1] ** 2 + y[:-1] * y[1:] + y[1:] ** 2)).sum() / 12
-        return density * area, np.array([density * polar])
+        xx = (cross * (x[:-1] ** 2 + x[:-1] * x[1:] + x[1:] ** 2)).sum() / 12  # integral of x^2 (mm^4)
+        yy = (cross * (y[:-1] ** 2 + y[:-1] * y[1:] + y[1:] ** 2)).sum() / 12
+        m = density * area
+        if dim == 2:
+            return m, np.array([density * (xx + yy)])
+        # 3-D blade: the section 1 mm thick about z = 0 (x and y axes through the tip centre)
+        return m, np.array([density * yy + m / 12, density * xx + m / 12, density * (xx + yy)])
     if shape == "cylinder":
         R, L = rigid["radius"], rigid["length"]
         m = density * np.pi * R * R * L

@@ -5,7 +5,8 @@ for a peg, the centre for a disc), so the rigid body's pose only maps points int
 frame. Shapes come from `geometry.model.Model.rigid`:
 rectangle (2-D peg, flat punch), cylinder (3-D peg), disc (2-D cylinder indenter),
 cylinder_y (3-D cylinder indenter, axis y), hole (a rigid hole, the peg deformable) and
-pin (2-D snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred).
+pin (snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred; in 3-D a blade,
+its section swept along z).
 """
 import numpy as np
 import ufl
@@ -60,7 +61,7 @@ def signed_distance(rigid: dict, xi):
         return ufl.sqrt(xi[0] ** 2 + xi[2] ** 2) - rigid["radius"]
     if shape == "hole" and len(xi) == 2:
         return _hole_2d(rigid, xi, tiny)
-    if shape == "pin" and len(xi) == 2:
+    if shape == "pin":  # 3-D: a blade, the same section in every plane z = const
         return _pin_2d(rigid["pieces"], rigid["length"], xi, tiny)
     raise InputError(f"rigid shape {shape!r} in {len(xi)}-D is not available")
 

@@ -9,8 +9,13 @@ beforehand so the JIT cache is warm):
 - 2-D wedging (scenes/wedging_2d.toml, l_d = 5): mesh resolution, against a Richardson
   extrapolation of the three finest resolutions, for the residual force R_A after release
   and the released tilt;
+- dislodging (scenes/dislodging_2d.toml, thesis case 1, 50 Hz pulses): threshold peak force,
+  impulse at the threshold and at 1.05 x the pull-out against dt_max and mesh resolution
+  (`femcontact.scenarios.dislodging.accuracy_rows`);
 - 3-D wedging (scenes/wedging_3d.toml, 2 ranks, `--with-3d`): resolution, against the finest;
-- the presets `accuracy = fast | balanced | accurate` on both 2-D problems.
+- the presets `accuracy = fast | balanced | accurate` on both 2-D problems;
+- 2-D insertion (scenes/insertion_2d.toml; rows from femcontact.scenarios.insertion): the in-hole
+  peak insertion force and the two-point onset against resolution, load increments and rtol.
 
 Each problem is one entry of `PROBLEMS`: a function returning its rows (and notes), the
 error columns of its table and its Pareto plots. A study family adds its rows by adding
@@ -160,8 +165,19 @@ PROBLEMS = {
     "wedging_2d": Problem("femcontact.scenarios.accuracy:wedging_rows",
                           ("error_residual_force_A", "error_tilt_released_deg"),
                           (("error_residual_force_A", "2-D wedging: residual force R_A after release"),)),
+    "dislodging": Problem("femcontact.scenarios.dislodging:accuracy_rows",
+                          ("error_threshold_N", "error_impulse_at_threshold_Ns", "error_impulse_fixed_Ns"),
+                          (("error_threshold_N", "Dislodging case 1, 50 Hz: threshold peak force"),
+                           ("error_impulse_fixed_Ns", "Dislodging case 1, 50 Hz: impulse at 1.05 x pull-out"))),
+    "snap_fit": Problem("femcontact.scenarios.snap_fit:accuracy_rows",
+                        ("error_peak_insertion_force", "error_insertion_force_ratio"),
+                        (("error_peak_insertion_force", "Snap fit (2-D): peak insertion force"),
+                         ("error_insertion_force_ratio", "Snap fit (2-D): insertion force ratio against statics"))),
     "wedging_3d": Problem("femcontact.scenarios.accuracy:wedging_3d_rows", ("error_resultant",),
                           (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
+    "insertion": Problem("femcontact.scenarios.insertion:accuracy_rows", ("error_peak_force", "error_two_point_onset"),
+                         (("error_peak_force", "2-D insertion: in-hole peak insertion force"),
+                          ("error_two_point_onset", "2-D insertion: two-point onset depth"))),
 }
 
 

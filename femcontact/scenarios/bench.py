@@ -1,27 +1,144 @@
 """`make bench`: what accuracy costs in time, and what each effect costs, measured in one run.
 
-1. Hertz (reference §5): errors of a and p0 against wall time as the contact zone is
-   refined (h_c = a/2.5 ... a/40.5), with the time per phase.
-2. The Hertz scene at about 10k dofs with each effect switched on in turn: time per
+1. Hertz (reference §5) against GetFEM on the same protocol: each code as a whole process
+   (`femcontact hertz --json`, P1 and P2; benchmarks/getfem_hertz.py, GetFEM P2 with its
+   augmented Lagrangian, skipped with a message when GetFEM is not importable) on the same
+   meshes h_c = a/(2^(L+1) + 0.5), L = 0..HERTZ_LEVELS, a and p0 from every code's nodal
+   pressures by one metric (`hertz.surface_metrics`); the time to reach and stay within 1 %
+   of a and of p0, as a ratio to GetFEM's.
+2. The default 2-D wedging case (scenes/wedging_2d.toml) warm (forms compiled): Newton
+   iterations per increment, residual assemblies per iteration, wall time.
+3. The Hertz scene at about 10k dofs with each effect switched on in turn: time per
    increment as a ratio to the frictionless quasi-static scene (an effect not named
    costs nothing), and the thesis wedging scene at about 10k dofs.
-Writes results/bench/bench.md and bench.json; timings are ratios within this run.
+4. The study runner's overhead per one-rank case, fresh processes against warm workers
+   (runner_overhead.py).
+The goals of issue 12 are stated as ratios measured in this run. Writes results/bench/bench.md
+and bench.json; timings are ratios within this run (a loaded machine inflates them all).
 """
 import json
+import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_half_width
-from femcontact.scenarios import hertz
+from femcontact.scenarios import hertz, runner_overhead
 from femcontact.config.scene import resolve
 from femcontact.solver.stepping import Simulation
 
 OUT = Path("results/bench")
+GETFEM_DRIVER = Path(__file__).resolve().parents[2] / "benchmarks" / "getfem_hertz.py"
+HERTZ_LEVELS = 4
+"""Finest Hertz level L (h_c = a/(2^(L+1) + 0.5)): a/32.5."""
+NEWTON_GOAL = 8
+"""Newton iterations per increment at most (Hertz at every level, the wedging load and release)."""
+WEDGING_GOAL = 2.0
+"""Wall time (s) of the default 2-D wedging case, warm, one core."""
+
+
+def _run(command: list) -> dict | None:
+    """Run one benchmark process; its JSON result with the outer wall time (s), or None."""
+    start = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True,
+                          env={**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        print(f"  failed ({done.returncode}): {' '.join(command)}\n{done.stderr[-2000:]}", file=sys.stderr)
+        return None
+    return {**json.loads(done.stdout.strip().splitlines()[-1]), "wall_time": wall}
+
+
+def getfem_available() -> str:
+    """'' when GetFEM's Python interface imports, else why the GetFEM column is skipped."""
+    if not GETFEM_DRIVER.exists():
+        return f"{GETFEM_DRIVER} is missing"
+    done = subprocess.run([sys.executable, "-c", "import getfem"], capture_output=True, text=True)
+    if done.returncode != 0:
+        return ("GetFEM's Python interface is not importable by " + sys.executable +
+                " (Debian: apt-get install python3-getfem; not a dependency of femcontact)")
+    return ""
+
+
+def hertz_codes() -> tuple[list[dict], str]:
+    """Every code at every level, each a whole process; (rows, why GetFEM was skipped)."""
+    skipped = getfem_available()
+    if skipped:
+        print(f"GetFEM column skipped: {skipped}")
+    a, p0 = hertz.analytic(*(hertz.BENCHMARK[k] for k in ("P", "R", "E", "nu")))
+    codes = [("femcontact P1", [sys.executable, "-m", "femcontact", "hertz", "--degree", "1"]),
+             ("femcontact P2", [sys.executable, "-m", "femcontact", "hertz", "--degree", "2"])]
+    if not skipped:
+        codes.append(("GetFEM P2", [sys.executable, str(GETFEM_DRIVER), "--degree", "2"]))
+    for _, command in codes:  # compile forms / warm the file cache outside the measurements
+        _run(command + ["--contact-size", repr(a / 2.5), "--json"])
+    rows = []
+    for level in range(HERTZ_LEVELS + 1):
+        h = a / (2 ** (level + 1) + 0.5)
+        for code, command in codes:
+            result = _run(command + ["--contact-size", repr(h), "--json"])
+            if result is None:
+                continue
+            x, p = zip(*result["surface"])
+            measured = hertz.surface_metrics(x, p)
+            rows.append({"code": code, "level": level, "a_over_h": 2 ** (level + 1) + 0.5, "dofs": result["dofs"],
+                         "newton_per_increment": result["newton_per_increment"],
+                         "error_a": measured["a"] / a - 1, "error_p0": measured["p0"] / p0 - 1,
+                         "wall_time": result["wall_time"], "solve_time": result["timings"]["solve"]})
+            print(f"  {code} L{level}: {rows[-1]['dofs']} dofs, Newton {rows[-1]['newton_per_increment']}, "
+                  f"a {100 * rows[-1]['error_a']:+.3f} %, p0 {100 * rows[-1]['error_p0']:+.3f} %, "
+                  f"{rows[-1]['wall_time']:.2f} s", flush=True)
+    return rows, skipped
+
+
+def time_within(rows: list[dict], code: str, key: str, tolerance: float = 0.01) -> dict | None:
+    """The coarsest level from which `code` stays within `tolerance` in `key` at every finer
+    level run, with its wall time (s); None if the finest level is outside."""
+    levels = sorted((r for r in rows if r["code"] == code), key=lambda r: r["level"])
+    found = None
+    for row in reversed(levels):
+        if abs(row[key]) > tolerance:
+            break
+        found = row
+    return found
+
+
+def wedging_default() -> dict:
+    """The default 2-D wedging case, warm: Newton per increment, assemblies, wall time (s)."""
+    from femcontact.config.scene import load_scene
+    from femcontact.solver.newton import SchurNewton
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "wedging_2d.toml")
+    Simulation(scene, MPI.COMM_SELF).run()  # compile the forms outside the measurement
+    counts = {"residual": 0, "direction": 0}
+    assemble, direction = SchurNewton.assemble_residual, SchurNewton.direction
+
+    def counted(name, method):
+        def wrapper(self, *args):
+            counts[name] += 1
+            return method(self, *args)
+        return wrapper
+
+    SchurNewton.assemble_residual, SchurNewton.direction = counted("residual", assemble), counted("direction", direction)
+    try:
+        start = time.perf_counter()
+        simulation = Simulation(scene, MPI.COMM_SELF)
+        simulation.run()
+        wall = time.perf_counter() - start
+    finally:
+        SchurNewton.assemble_residual, SchurNewton.direction = assemble, direction
+    steps = {}
+    for row in simulation.history:
+        steps.setdefault(row["step"], []).append(row["newton_iterations"])
+    return {"dofs": simulation.dofs, "newton": steps, "wall_time": wall, "timings": simulation.timings,
+            "residual_assemblies": counts["residual"], "newton_directions": counts["direction"]}
 
 
 def hertz_table() -> list[dict]:
+    """femcontact P1 in-process (phases) from a/2.5 to a/40.5."""
     a = benchmark_half_width()
     hertz.run(a / 2.5)  # compile the forms once, outside the measurements
     rows = []
@@ -81,8 +198,58 @@ def effect_costs() -> list[dict]:
     return rows
 
 
-def markdown(hertz_rows, effects_rows) -> str:
-    lines = ["# femcontact benchmark", "", "## Hertz: accuracy against wall time (1 rank)", "",
+def goals(codes: list[dict], skipped: str, wedging: dict) -> list[list[str]]:
+    """Issue 12's goals as measured in this run: [goal, measured, ratio, holds]."""
+    out = []
+    hertz_max = max([max(r["newton_per_increment"]) for r in codes if r["code"].startswith("femcontact")], default=0)
+    wedging_max = max(max(v) for v in wedging["newton"].values())
+    for name, worst in (("Hertz, every level, P1 and P2", hertz_max), ("wedging 2-D, load and release", wedging_max)):
+        out.append([f"Newton iterations per increment <= {NEWTON_GOAL}: {name}", str(worst),
+                    f"{worst / NEWTON_GOAL:.2f}", "yes" if worst <= NEWTON_GOAL else "no"])
+    per_iteration = wedging["residual_assemblies"] / wedging["newton_directions"]
+    out.append(["residual assemblies per Newton iteration <= 2 (wedging 2-D)",
+                f"{wedging['residual_assemblies']} / {wedging['newton_directions']} = {per_iteration:.2f}",
+                f"{per_iteration / 2:.2f}", "yes" if per_iteration <= 2 else "no"])
+    out.append([f"wedging 2-D warm under {WEDGING_GOAL:g} s (one core)", f"{wedging['wall_time']:.2f} s",
+                f"{wedging['wall_time'] / WEDGING_GOAL:.2f}", "yes" if wedging["wall_time"] <= WEDGING_GOAL else "no"])
+    for key, label in (("error_a", "a"), ("error_p0", "p0")):
+        reference = None if skipped else time_within(codes, "GetFEM P2", key)
+        for code in ("femcontact P1", "femcontact P2"):
+            ours = time_within(codes, code, key)
+            goal = f"Hertz: time to reach and stay within 1 % of {label}, {code} <= GetFEM P2's"
+            if ours is None:
+                out.append([goal, f"not within 1 % at L{HERTZ_LEVELS}", "-", "no"])
+            elif reference is None:
+                out.append([goal, f"{ours['wall_time']:.2f} s (L{ours['level']}); GetFEM "
+                            + ("skipped" if skipped else f"not within 1 % at L{HERTZ_LEVELS}"), "-", "-"])
+            else:
+                ratio = ours["wall_time"] / reference["wall_time"]
+                out.append([goal, f"{ours['wall_time']:.2f} s (L{ours['level']}) vs {reference['wall_time']:.2f} s "
+                            f"(L{reference['level']})", f"{ratio:.2f}", "yes" if ratio <= 1 else "no"])
+    return out
+
+
+def markdown(hertz_rows, effects_rows, codes=(), skipped="", wedging=None) -> str:
+    lines = ["# femcontact benchmark", "", "Wall times measured in one run on a shared machine (other jobs running): "
+             "compare them as ratios within this run.", ""]
+    if wedging is not None:
+        lines += ["## Goals (issue 12), measured in this run", "", "| goal | measured | ratio to goal | holds |",
+                  "|---|---|---|---|"]
+        lines += ["| " + " | ".join(row) + " |" for row in goals(list(codes), skipped, wedging)]
+        lines += ["", f"Default 2-D wedging case ({wedging['dofs']} dofs), warm: Newton per increment "
+                  + ", ".join(f"{step} {values}" for step, values in wedging["newton"].items())
+                  + f"; wall time {wedging['wall_time']:.2f} s ("
+                  + ", ".join(f"{k} {v:.2f}" for k, v in wedging["timings"].items()) + ")", ""]
+    lines += ["## Hertz: femcontact and GetFEM on the same protocol (whole processes, 1 rank)", ""]
+    if skipped:
+        lines += [f"GetFEM column skipped: {skipped}.", ""]
+    lines += ["| code | L | a/h_c | dofs | Newton per increment | error a | error p0 | wall time (s) | solve (s) |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in codes:
+        lines.append(f"| {r['code']} | {r['level']} | {r['a_over_h']} | {r['dofs']} | {r['newton_per_increment']} | "
+                     f"{100 * r['error_a']:+.3f} % | {100 * r['error_p0']:+.3f} % | {r['wall_time']:.2f} | "
+                     f"{r['solve_time']:.2f} |")
+    lines += ["", "## Hertz: femcontact P1 accuracy against wall time, per phase (in-process, forms compiled, 1 rank)", "",
              "| a/h_c | dofs | error a | error p0 | Newton its | wall time (s) | mesh | forms | solve |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in hertz_rows:
@@ -99,10 +266,15 @@ def markdown(hertz_rows, effects_rows) -> str:
 
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
+    codes, skipped = hertz_codes()
+    wedging = wedging_default()
     hertz_rows = hertz_table()
     effects_rows = effect_costs()
-    (OUT / "bench.json").write_text(json.dumps({"hertz": hertz_rows, "effects": effects_rows}, indent=1))
-    text = markdown(hertz_rows, effects_rows)
+    overhead = runner_overhead.measure(OUT / "runner")
+    (OUT / "bench.json").write_text(json.dumps({"hertz_codes": codes, "getfem_skipped": skipped, "wedging": wedging,
+                                                "hertz": hertz_rows, "effects": effects_rows,
+                                                "runner_overhead": overhead}, indent=1))
+    text = markdown(hertz_rows, effects_rows, codes, skipped, wedging) + "\n" + runner_overhead.markdown(overhead)
     (OUT / "bench.md").write_text(text)
     print(text)
     print(f"written: {OUT / 'bench.md'}")

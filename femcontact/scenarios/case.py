@@ -60,7 +60,13 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     listeners = [history] + ([] if quiet else [Progress(scene, rank=rank)])
     try:
         simulation = Simulation(scene, listeners=listeners)
-        simulation.run(simulation.load_checkpoint(restart) if restart else 0)
+        first_step = simulation.load_checkpoint(restart) if restart else 0
+        if scene["geometry"] == "snap_fit":  # a jam ends the run as an outcome, not a failure
+            from femcontact.scenarios.snap_fit import run as run_snap_fit
+
+            run_snap_fit(simulation, first_step)
+        else:
+            simulation.run(first_step)
     finally:
         for listener in listeners:
             listener.close()

@@ -44,10 +44,19 @@ def measure(simulation) -> dict:
     comm = simulation.problem.mesh.comm
     x = np.concatenate(comm.allgather(nodal["coordinates"][:, 0][nodal["pressure"] > 0]))
     p = np.concatenate(comm.allgather(nodal["pressure"][nodal["pressure"] > 0]))
-    p0 = float(p.max())
+    return surface_metrics(x, p)
+
+
+def surface_metrics(x, p) -> dict:
+    """(a mm, p0 MPa) from nodal pressures p (MPa) at x (mm) on the loaded edge, any code's:
+    p0 the largest, a from p^2 linear in x^2 over the nodes in contact (p above 1e-9 p0, which
+    drops a multiplier's round-off outside contact) with x^2 >= x_max^2 / 4."""
+    x, p = np.asarray(x, dtype=float), np.asarray(p, dtype=float)
+    touching = p > 1e-9 * p.max()
+    x, p = x[touching], p[touching]
     outer = x * x >= 0.25 * (x * x).max()
     slope, intercept = np.polyfit(x[outer] ** 2, p[outer] ** 2, 1)
-    return {"a": math.sqrt(-intercept / slope), "p0": p0, "contact_nodes": int(len(p))}
+    return {"a": math.sqrt(-intercept / slope), "p0": float(p.max()), "contact_nodes": int(len(p))}
 
 
 def run(contact_size: float, comm=MPI.COMM_WORLD, **kwargs) -> dict:

@@ -40,8 +40,18 @@ JAM_SLOPE = 5.0
 JAM_WINDOW = 0.05  # mm
 
 
+def in_plane(scene: dict, row: dict) -> tuple[str, float, float]:
+    """The axial axis name ('y' in 2-D, 'z' in 3-D), the tilt (deg, top towards -x positive) and
+    the support's moment about C in the insertion plane (N*mm, counter-clockwise in (x, axial)):
+    2-D M_z; 3-D the x-z plane, i.e. -M_y."""
+    if scene["dim"] == 2:
+        return "y", row["tilt_deg"], row["support_Mz"]
+    return "z", row["tilt_xz_deg"], -row["support_My"]
+
+
 def force_history(scene: dict, history: list[dict]) -> dict:
-    """Depth, Fz, Fx, M, tilt (deg) and phase of every row (analytic tier's conventions)."""
+    """Depth, Fz, Fx, M, tilt (deg) and phase of every row (analytic tier's conventions; in 3-D
+    in the x-z plane, where the lateral and angular errors lie)."""
     peg, hole, support = scene["peg"], scene["hole"], scene["support"]
     h_c = chamfer_height(hole["chamfer_width"], hole["chamfer_angle"])
     r, lg = peg["width"] / 2, support["compliance_centre"]
@@ -50,10 +60,11 @@ def force_history(scene: dict, history: list[dict]) -> dict:
     floor = max(CONTACT_FLOOR * largest, 1e-12)
     out = {key: [] for key in ("depth", "gripper_depth", "Fz", "Fx", "M", "theta", "phase", "force_A", "force_B", "l")}
     for row in history:
-        theta = math.radians(row["tilt_deg"])
-        Fz, Fx = -row["support_Fy"], row["support_Fx"]
+        ax, tilt_deg, M_C = in_plane(scene, row)
+        theta = math.radians(tilt_deg)
+        Fz, Fx = -row[f"support_F{ax}"], row["support_Fx"]
         # moment about the tip: M_C + (C - tip) x F, C - tip = L_g (-sin theta, cos theta), F = (Fx, -Fz)
-        M = row["support_Mz"] + lg * (-math.sin(theta)) * (-Fz) - lg * math.cos(theta) * Fx
+        M = M_C + lg * (-math.sin(theta)) * (-Fz) - lg * math.cos(theta) * Fx
         touching = [zone for zone in "AB" if row[f"contact_{zone}_force"] > floor]
         if not touching:
             phase = "none"
@@ -61,19 +72,19 @@ def force_history(scene: dict, history: list[dict]) -> dict:
             phase = "two_point"
         else:
             side = -1.0 if touching[0] == "A" else 1.0
-            corner_y = row["tip_y"] + side * r * math.sin(theta)
+            corner_y = row[f"tip_{ax}"] + side * r * math.sin(theta)
             on_corner = row.get("corner_contacts", 1) > 0
             phase = "chamfer" if on_corner and corner_y > -h_c - h_contact / 2 else "one_point"
-        out["depth"].append(peg["insertion_depth"] - row["gripper_y"] - row["support_qy"] - h_c)
-        out["gripper_depth"].append(peg["insertion_depth"] - row["gripper_y"] - h_c)
+        out["depth"].append(peg["insertion_depth"] - row[f"gripper_{ax}"] - row[f"support_q{ax}"] - h_c)
+        out["gripper_depth"].append(peg["insertion_depth"] - row[f"gripper_{ax}"] - h_c)
         out["Fz"].append(Fz)
         out["Fx"].append(Fx)
         out["M"].append(M)
-        out["theta"].append(row["tilt_deg"])
+        out["theta"].append(tilt_deg)
         out["phase"].append(phase)
         # two-point: l from the tip to the edge contact (the higher zone centre) along the peg
-        higher = max(row["contact_A_y"], row["contact_B_y"]) if phase == "two_point" else math.nan
-        out["l"].append((higher - row["tip_y"]) / math.cos(theta))
+        higher = max(row[f"contact_A_{ax}"], row[f"contact_B_{ax}"]) if phase == "two_point" else math.nan
+        out["l"].append((higher - row[f"tip_{ax}"]) / math.cos(theta))
         out["force_A"].append(row["contact_A_force"])
         out["force_B"].append(row["contact_B_force"])
     return out
@@ -114,40 +125,44 @@ def jam_depth(scene: dict, curve: dict) -> float | None:
     return None
 
 
-def inside_cones(row: dict, mu: float) -> bool:
+def inside_cones(scene: dict, row: dict, mu: float) -> bool:
     """The two zone force centres lie inside each other's friction cones (wall normal x, peg
-    side normal (cos theta, sin theta))."""
-    a = np.array([row["contact_A_x"], row["contact_A_y"]])
-    b = np.array([row["contact_B_x"], row["contact_B_y"]])
+    side normal (cos theta, sin theta)), in the insertion plane."""
+    ax, tilt_deg, _ = in_plane(scene, row)
+    a = np.array([row["contact_A_x"], row[f"contact_A_{ax}"]], dtype=float)
+    b = np.array([row["contact_B_x"], row[f"contact_B_{ax}"]], dtype=float)
     if not np.all(np.isfinite(np.r_[a, b])) or np.allclose(a, b):
         return False
     e = (b - a) / np.linalg.norm(b - a)
-    theta = math.radians(row["tilt_deg"])
+    theta = math.radians(tilt_deg)
     cos_cone = 1.0 / math.hypot(1.0, mu)
     return bool(abs(e[0]) >= cos_cone and abs(e @ np.array([math.cos(theta), math.sin(theta)])) >= cos_cone)
 
 
-def insertion_metrics(simulation) -> dict:
-    """The metrics above (2-D; a 3-D run reports its wall time only, its phases are not classified yet)."""
-    scene, history = simulation.scene, simulation.history
-    if scene["dim"] != 2:
-        return {"analytic": False, "wall_time_s": float(sum(simulation.timings.values()))}
-    curve = force_history(scene, history)
+def in_hole_peak(curve: dict) -> tuple[float | None, float | None]:
+    """Largest Fz (N) at s >= 0 outside the chamfer phase and its depth s (mm), or (None, None)."""
     depth, Fz = np.array(curve["depth"]), np.array(curve["Fz"])
     inside = (depth >= 0) & np.array([ph != "chamfer" for ph in curve["phase"]])
+    if not inside.any():
+        return None, None
+    i = int(np.argmax(np.where(inside, Fz, -np.inf)))
+    return float(Fz[i]), float(depth[i])
+
+
+def insertion_metrics(simulation) -> dict:
+    """The metrics above (3-D: in the x-z plane)."""
+    scene, history = simulation.scene, simulation.history
+    curve = force_history(scene, history)
+    depth = np.array(curve["depth"])
     out = {"two_point_onset": two_point_onset(curve)}
-    if inside.any():
-        i = int(np.argmax(np.where(inside, Fz, -np.inf)))
-        out["peak_force"], out["peak_depth"] = float(Fz[i]), float(depth[i])
-    else:
-        out["peak_force"], out["peak_depth"] = None, None
+    out["peak_force"], out["peak_depth"] = in_hole_peak(curve)
     chamfer = [f for f, ph in zip(curve["Fz"], curve["phase"]) if ph == "chamfer"]
     out["chamfer_peak_force"] = float(max(chamfer)) if chamfer else None
     out["jam_depth"] = jam_depth(scene, curve)
     out["stopped"] = bool(simulation.stopped)
     out["jammed"] = out["jam_depth"] is not None or out["stopped"]
     mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
-    out["wedged"] = any(ph == "two_point" and inside_cones(row, mu) for row, ph in zip(history, curve["phase"]))
+    out["wedged"] = any(ph == "two_point" and inside_cones(scene, row, mu) for row, ph in zip(history, curve["phase"]))
     out["final_depth"] = float(depth[-1])
     for phase in ("chamfer", "one_point", "two_point"):
         out[f"{phase}_increments"] = sum(ph == phase for ph in curve["phase"])
@@ -163,33 +178,50 @@ PHASES = ("chamfer", "one_point", "two_point")
 
 
 def analytic_problem(scene: dict):
-    """The scene as a `whitney.Insertion` (2-D, diagonal support), or None when the analytic tier
-    does not describe it (3-D, a coupled stiffness, no chamfer)."""
+    """The scene as a `whitney.Insertion` and the depth offset (mm) of the analytic tier's tip below
+    the real one, or None when the analytic tier does not describe it (a support coupled in the
+    insertion plane, no chamfer). 3-D: the x-z plane (K_x = K[x, x], K_theta = K[ry, ry]).
+
+    A tip rim rounded with radius rho (`peg.corner_radius`) is the analytic tier's sharp peg of the
+    same width with its tip rho higher (at the rounding's centres): the rounding touches a wall
+    where that sharp corner does, to rho (1 - cos theta), and the edge touches the same straight
+    side; so L_g - rho, eps0 - rho sin theta0, and depths rho cos theta0 deeper. On the chamfer the
+    rounding touches elsewhere: the chamfer phase is not mapped exactly."""
     from femcontact.effects.compliant_support import stiffness_matrix
     from femcontact.references import whitney
 
     K = stiffness_matrix(scene)
-    if scene["dim"] != 2 or np.count_nonzero(K - np.diag(np.diag(K))) or scene["hole"]["chamfer_width"] <= 0:
+    plane = [0, 1, 2] if scene["dim"] == 2 else [0, 2, 4]
+    K_plane = K[np.ix_(plane, plane)]
+    if np.count_nonzero(K_plane - np.diag(np.diag(K_plane))) or scene["hole"]["chamfer_width"] <= 0:
         return None
     peg, hole = scene["peg"], scene["hole"]
     mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
-    return whitney.Insertion(peg["width"], hole["width"], mu, K[0, 0], K[2, 2], scene["support"]["compliance_centre"],
-                             peg["offset"], math.radians(peg["tilt"]), hole["chamfer_width"],
-                             math.radians(hole["chamfer_angle"]))
+    rho, theta0 = peg["corner_radius"], math.radians(peg["tilt"])
+    problem = whitney.Insertion(peg["width"], hole["width"], mu, K_plane[0, 0], K_plane[2, 2],
+                                scene["support"]["compliance_centre"] - rho, peg["offset"] - rho * math.sin(theta0),
+                                theta0, hole["chamfer_width"], math.radians(hole["chamfer_angle"]))
+    return problem, rho * math.cos(theta0)
 
 
 def analytic_curve(scene: dict, depth_max: float, points: int = 201) -> dict | None:
-    """The analytic force history to depth_max (mm), or None (see analytic_problem)."""
+    """The analytic force history to depth_max (mm), or None (see analytic_problem); depths are
+    those of the scene's tip."""
     from femcontact.errors import InputError
     from femcontact.references import whitney
 
-    problem = analytic_problem(scene)
-    if problem is None:
+    described = analytic_problem(scene)
+    if described is None:
         return None
+    problem, offset = described
     try:
-        return whitney.insertion(problem, depth_max, points)
+        curve = whitney.insertion(problem, depth_max - offset, points)
     except InputError:
         return None
+    curve["depth"] = [s + offset for s in curve["depth"]]
+    for key in ("two_point_onset", "peak_depth", "jam_depth"):
+        curve[key] = None if curve[key] is None else curve[key] + offset
+    return curve
 
 
 def compare(curve: dict, analytic: dict) -> dict:
@@ -232,3 +264,68 @@ def analytic_metrics(scene: dict, curve: dict) -> dict:
            "analytic_wedging": analytic["wedging_possible"]}
     out.update(compare(curve, analytic))
     return out
+
+
+# ---- `make accuracy`: the 2-D insertion's accuracy against wall time -----------------------------
+ACCURACY_RESOLUTIONS = (0.5, 0.7, 1.0, 1.4)
+ACCURACY_INCREMENTS = (26, 52, 104)
+ACCURACY_RTOLS = (1e-6, 1e-9, 1e-11)
+ACCURACY_KEYS = ("peak_force", "two_point_onset")
+
+
+def accuracy_case(label: str, knob: str, overrides=()) -> dict:
+    """One run of scenes/insertion_2d.toml with `overrides`: the in-hole peak force (N), the
+    two-point onset (mm) and the wall time (s: mesh, forms, solve and measurement)."""
+    import time
+    from pathlib import Path
+
+    from femcontact.config.scene import load_scene
+    from femcontact.solver.stepping import Simulation
+
+    start = time.perf_counter()
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml", list(overrides))
+    simulation = Simulation(scene)
+    simulation.run()
+    curve = force_history(scene, simulation.history)
+    peak, _ = in_hole_peak(curve)
+    return {"knob": knob, "setting": label, "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
+            "newton_iterations": sum(r["newton_iterations"] for r in simulation.history),
+            "increments": len(simulation.history), "peak_force": peak, "two_point_onset": two_point_onset(curve)}
+
+
+def accuracy_rows() -> tuple[list[dict], list[str]]:
+    """`make accuracy` rows of the 2-D insertion (scenes/insertion_2d.toml): the in-hole peak force
+    and the two-point onset depth against mesh resolution (errors against a Richardson extrapolation
+    of the three finest resolutions, else the finest), against the number of load increments at
+    resolution 1 and against Newton's rtol (errors against the finest setting of that knob). The
+    scene's own setting (resolution 1, 52 increments, rtol 1e-9) is run once and shown in each knob."""
+    from femcontact.scenarios.accuracy import richardson
+
+    accuracy_case("warm-up", "", ["mesh.resolution=0.5", "steps.0.increments=3", "steps.0.support_motion.y=-1.2"])
+    mesh = [accuracy_case(f"resolution {r:g}", "mesh (P1)", [f"mesh.resolution={r}"]) for r in ACCURACY_RESOLUTIONS]
+    base = mesh[ACCURACY_RESOLUTIONS.index(1.0)]  # the scene as it is: 52 increments, rtol 1e-9
+
+    def knob(label, name, override, is_base):
+        return dict(base, knob=name, setting=label) if is_base else accuracy_case(label, name, [override])
+
+    steps = [knob(f"{n} increments", "load increments", f"steps.0.increments={n}", n == 52) for n in ACCURACY_INCREMENTS]
+    rtols = [knob(f"rtol {t:g}", "Newton rtol", f"solver.rtol={t}", t == 1e-9) for t in ACCURACY_RTOLS]
+    notes = []
+    for key in ACCURACY_KEYS:
+        finest = [row[key] for row in mesh[-3:]]
+        if None in finest:
+            reference, how = mesh[-1][key], "the finest resolution (a value is missing)"
+        else:
+            reference, order = richardson(finest, ACCURACY_RESOLUTIONS[-1] / ACCURACY_RESOLUTIONS[-2])
+            how = (f"Richardson extrapolation of resolutions {', '.join(f'{r:g}' for r in ACCURACY_RESOLUTIONS[-3:])} "
+                   f"(observed order {order:.2f})" if math.isfinite(order) and order > 0 else
+                   f"the finest resolution (no Richardson: the three finest values do not converge "
+                   f"monotonically, observed order {order:.2f})")
+        references = [(mesh, reference), (steps, steps[-1][key]), (rtols, rtols[-1][key])]
+        for rows, value in references:
+            for row in rows:
+                ok = row[key] is not None and value
+                row[f"error_{key}"] = abs(row[key] / value - 1) if ok else float("nan")
+        notes.append(f"Reference for {key}: mesh rows {reference if reference is None else f'{reference:.6g}'} from {how}; "
+                     f"increment rows the {ACCURACY_INCREMENTS[-1]} increments, rtol rows rtol {ACCURACY_RTOLS[-1]:g}.")
+    return mesh + steps + rtols, notes

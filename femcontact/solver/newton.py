@@ -28,6 +28,8 @@ from petsc4py import PETSc
 
 from femcontact.physics.rotation import cross_with_axis, rigid_modes
 
+ROOT_EVALUATIONS = 6
+"""Residual assemblies the line search spends at most on the root of the slope g(alpha)."""
 DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
 
@@ -67,6 +69,7 @@ class SchurNewton:
         self.extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
         self.bc_dofs = p.support_dof_set
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
+        self._assembled = None  # (load, u, r, residual) of the last residual assembly
 
     def _near_nullspace(self) -> PETSc.NullSpace:
         """Near-nullspace of elasticity (translations and rotations) for algebraic multigrid."""
@@ -112,7 +115,19 @@ class SchurNewton:
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
         scale = max(self.b_bulk.norm(), np.linalg.norm(Q_ext), np.linalg.norm(G))
+        self._assembled = (load, p.u.x.array.copy(), p.rigid.values.copy(), (R_u, R_r, scale))
         return R_u, R_r, scale
+
+    def current_residual(self, load):
+        """`assemble_residual` at the current state, reusing the last assembly when it was
+        made there (the converged state of an increment, for the outputs)."""
+        p = self.problem
+        if self._assembled is not None:
+            at, u, r, residual = self._assembled
+            here = at is load and np.array_equal(u, p.u.x.array) and np.array_equal(r, p.rigid.values)
+            if p.mesh.comm.allreduce(here, op=MPI.LAND):  # every rank decides alike (assembly is collective)
+                return residual
+        return self.assemble_residual(load)
 
     def norm(self, R_u, R_r) -> float:
         free = self.problem.rigid.free
@@ -220,25 +235,34 @@ class SchurNewton:
         rhs_r = -R_r + np.array([K_ru[i].dot(y) for i in range(n_r)])
         dr = np.zeros(n_r)
         if free.any():
-            dr[free] = self._rigid_step(S[np.ix_(free, free)], rhs_r[free])
+            S_ff = S[np.ix_(free, free)]
+            dr[free] = self._rigid_step(S_ff, rhs_r[free])
+            if dr[free] @ S_ff @ dr[free] <= 0:  # no stiffness along the step: see _rigid_step
+                dr[free] = self._rigid_step(S_ff, rhs_r[free], shifted=True)
         y.copy(du)
         du.scale(-1.0)
         for k in range(n_r):
             du.axpy(-dr[k], X[k])
         return du, dr
 
-    def _rigid_step(self, S_ff, rhs) -> np.ndarray:
+    def _rigid_step(self, S_ff, rhs, shifted: bool = False) -> np.ndarray:
         """Solve S dr = rhs for the free rigid dofs inside a trust region.
 
         A body out of contact has no stiffness: S is regularised by 1e-9 of its own scale
-        (or of E * size) and the step is capped at one contact element size h (rotations
-        at h / size), so a body that must travel to meet its partner gets there in steps
-        instead of leaping through it. The regularisation only shapes the step; the
-        converged state solves the unregularised equations."""
+        (or of E * size). A body pivoting on a contact under load can have a negative one
+        (the moment of the contact force as the body turns; friction makes S unsymmetric):
+        where the step meets no positive stiffness (dr . S dr <= 0) it leads uphill, away
+        from equilibrium, and `shifted` lifts the spectrum of S's symmetric part to that
+        floor, so the step goes downhill (modified Newton). The step is capped at one
+        contact element size h (rotations at h / size), so a body that must travel to meet
+        its partner gets there in steps instead of leaping through it. Regularisation and
+        shift only shape the step; the converged state solves the unmodified equations."""
         p = self.problem
         size = p.shape["scale"]
         scale = max(np.abs(np.diag(S_ff)).max(), float(p.constants["E"].value) * size)
-        dr = np.linalg.solve(S_ff + 1e-9 * scale * np.eye(len(rhs)), rhs)
+        floor = 1e-9 * scale
+        lowest = np.linalg.eigvalsh(0.5 * (S_ff + S_ff.T)).min() if shifted else floor
+        dr = np.linalg.solve(S_ff + max(floor, floor - lowest) * np.eye(len(rhs)), rhs)
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
         cap = p.model.h_contact
         return dr * min(1.0, cap / length) if length > 0 else dr
@@ -263,11 +287,11 @@ class SchurNewton:
         iteration). When it does not but overshoots along the direction, that is the
         directional derivative g(alpha) = R(alpha) . (du, dr) (N*mm, the slope of the
         energy for a potential problem) turns from negative to positive, the step stops
-        near the root of g (|g| <= |g(0)| / 2, at most 3 assemblies): a semismooth Newton
-        step linearised on too few contact nodes (a cold contact set, a growing contact
-        zone) drives the body past equilibrium into a far too large contact set, which
-        the following iterations could only shed a few nodes at a time; stopping at the
-        root approaches the contact set from inside. Failing both, the longest of
+        near the root of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies): a
+        semismooth Newton step linearised on too few contact nodes (a cold contact set, a
+        growing contact zone) drives the body past equilibrium into a far too large contact
+        set, which the following iterations could only shed a few nodes at a time; stopping
+        at the root approaches the contact set from inside. Failing both, the longest of
         1/2, 1/4, ... 1/4096 that lowers |R| (else the best found)."""
         p = self.problem
         norm = self.norm(*residual[:2])
@@ -281,16 +305,19 @@ class SchurNewton:
             return trial
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
-            a_lo, a_hi, (a, g) = 0.0, 1.0, (1.0, g1)
-            for _ in range(3):
+            a_lo, a_hi, (a, g), flat = 0.0, 1.0, (1.0, g1), False
+            for _ in range(ROOT_EVALUATIONS):
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
                 c = (g - g0 + g0 * a) / (a * a)
                 alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
                 if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
+                if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
+                    alpha = a_lo + 0.125 * (a_hi - a_lo)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
-                a, g = alpha, self._slope(trial, du, dr)
+                previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
+                flat = 0 < g and abs(g - previous) <= 0.1 * (g - g0)
                 if not np.isfinite(g):
                     break
                 if abs(g) <= 0.5 * abs(g0):

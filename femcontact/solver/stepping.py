@@ -65,6 +65,7 @@ class Simulation:
                               for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
         self.stabilized_increments = 0
         self.stopped = ""  # why the run ended before its last step, if a stop condition did it
+        self.last_change = None  # (step, dt, displacement change) of the last converged increment
         self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
@@ -149,6 +150,7 @@ class Simulation:
         p.begin_increment(load)
         start = time.perf_counter()
         try:
+            self._predict(load)
             self._prescribe(load)
             self.stabilization_force = 0.0
             try:
@@ -166,7 +168,20 @@ class Simulation:
         row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
         self.timings["output"] += time.perf_counter() - start
         p.commit(load.dt)
+        self.last_change = (load.step, load.dt, p.u.x.array - state["u"])
         return row
+
+    def _predict(self, load) -> None:
+        """`solver.predictor = 'extrapolate'`: start from the last converged displacement plus the
+        last increment's change scaled to this dt (same step only). Under prescribed motion the
+        deformable body then follows a receding rigid body: started from the last state, the
+        contact would be open, Newton's first step (linearised without it) would relax the spring
+        through the rigid body, and the line search would creep back to the contact."""
+        if self.scene["solver"]["predictor"] != "extrapolate" or self.last_change is None:
+            return
+        step, dt, change = self.last_change
+        if step == load.step and dt > 0:
+            self.problem.u.x.array[:] += (load.dt / dt) * change
 
     def _prescribe(self, load) -> None:
         rigid = self.problem.rigid

@@ -48,7 +48,8 @@ def case_curves(row: dict, results: Path):
 def _label(scene: dict) -> str:
     peg, support = scene["peg"], scene["support"]
     rcc = f"RCC k {support['rcc']['k']:g}, " if support["model"] == "rcc" else ""
-    return (f"{rcc}eps0 {peg['offset']:g}, th0 {peg['tilt']:g} deg, L_g {support['compliance_centre']:g}, "
+    rim = f"rim r {peg['corner_radius']:g}, " if peg["corner_radius"] > 0 else ""
+    return (f"{scene['dim']}-D, {rcc}{rim}eps0 {peg['offset']:g}, th0 {peg['tilt']:g} deg, L_g {support['compliance_centre']:g}, "
             f"mu {scene['contact']['mu']:g}, D {scene['hole']['width']:g}, E {scene['materials']['hole']['E']:g}")
 
 

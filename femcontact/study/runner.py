@@ -9,11 +9,15 @@ exists (written atomically by `femcontact run`, or by this runner for a case
 that timed out or crashed without one).
 
 Cases run as subprocesses through the study's launcher (`mpirun -n {ranks}` by
-default, `srun -n {ranks}` under SLURM), `jobs` at a time. Each job slot has its
-own FFCx JIT cache (`XDG_CACHE_HOME`), so concurrent first compilations never
-contend for the same cache locks. See docs/studies.md.
+default, `srun -n {ranks}` under SLURM), `jobs` at a time; one-rank cases under the
+default launcher run in warm worker processes instead, one per job slot, each paying
+the start-up once (workers.py). Each job slot has its own FFCx JIT cache
+(`XDG_CACHE_HOME`), held with a file lock for the runner's lifetime, so concurrent first
+compilations never contend for the same cache, even between two studies run at once.
+See docs/studies.md.
 """
 import ctypes
+import fcntl
 import functools
 import itertools
 import json
@@ -30,6 +34,7 @@ from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.study.workers import Pool, Worker
 
 _TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
 _TABLES = Field("any", [], "an array of tables",
@@ -49,6 +54,8 @@ SCHEMA = {
         "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
                           check=lambda v: _check_launcher(v)),
         "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
+        "workers": Field("bool", True, "one-rank cases under the default launcher run in warm worker processes "
+                         "(one per job, importing femcontact once); false: a fresh launcher process per case"),
     },
     "scene": _TABLE,
     "sweep": {
@@ -338,6 +345,11 @@ class Job:
     slot: int
     started: float
     killed: str | None = None
+    worker: Worker | None = None  # the warm worker running it, if any (then `process` is the worker's)
+
+    def exit_code(self) -> int | None:
+        """The case's exit code once it is over, else None."""
+        return self.worker.poll() if self.worker else self.process.poll()
 
 
 def _die_with_parent(parent: int) -> None:
@@ -353,22 +365,38 @@ def femcontact_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "femcontact"]
 
 
-def remove_unfinished_compilations(cache_root: Path, slots: str = "slot-*") -> None:
-    """Clean the job slots' JIT caches (see femcontact.io.remove_stale_compilations). Safe at
-    any age here: the runner holds the study lock and its job slots' caches are its own (a
-    SLURM task cleans only the slot it holds)."""
-    for directory in cache_root.glob(f"{slots}/fenics"):
-        remove_stale_compilations(directory, older_than=0.0)
+def take_slot(cache_root: Path, kind: str = "slot"):
+    """The first JIT cache slot `KIND-K` that no other runner or SLURM task on this file system
+    holds: (its name, the open lock file, held until closed or the process ends)."""
+    cache_root.mkdir(parents=True, exist_ok=True)
+    for number in itertools.count():
+        lock = open(cache_root / f"{kind}-{number}.lock", "w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return f"{kind}-{number}", lock
+        except BlockingIOError:
+            lock.close()
+
+
+def remove_unfinished_compilations(cache_root: Path, slot: str) -> None:
+    """Clean a held job slot's JIT cache (see femcontact.io.remove_stale_compilations). Safe at
+    any age: the slot's lock makes its cache this process's own."""
+    remove_stale_compilations(cache_root / slot / "fenics", older_than=0.0)
 
 
 def case_command(case: Case, launcher: str, ranks: int) -> list[str]:
     """The command that runs `case` in its directory: LAUNCHER FEMCONTACT run scene.toml ..."""
-    command = shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + ["run", "scene.toml", "--out", "."]
+    return shlex.split(launcher.format(ranks=ranks)) + femcontact_command() + run_arguments(case)
+
+
+def run_arguments(case: Case) -> list[str]:
+    """The `femcontact` arguments that run `case` in its directory: run scene.toml --out . ..."""
+    arguments = ["run", "scene.toml", "--out", "."]
     if case.prefix is not None:
-        command += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
+        arguments += ["--restart", str((case.prefix.dir / "checkpoint").resolve())]
     elif case.is_prefix:
-        command += ["--checkpoint"]
-    return command
+        arguments += ["--checkpoint"]
+    return arguments
 
 
 class Runner:
@@ -381,26 +409,44 @@ class Runner:
         cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
         self.cache_root = cache / "femcontact-jit"
         self.running: list[Job] = []
-        remove_unfinished_compilations(self.cache_root)
+        self.slots = [take_slot(self.cache_root) for _ in range(jobs)]  # (name, lock) per job slot
+        for name, _ in self.slots:
+            remove_unfinished_compilations(self.cache_root, name)
+        settings = study.settings
+        warm = settings["workers"] and ranks == 1 and settings["launcher"] == SCHEMA["study"]["launcher"].default
+        self.pool = Pool(self.environment, functools.partial(_die_with_parent, os.getpid())) if warm else None
+
+    def environment(self, slot: int) -> dict:
+        """The environment of job slot `slot`'s processes: its own JIT cache."""
+        return launch_environment(self.cache_root / self.slots[slot][0])
 
     def command(self, case: Case) -> list[str]:
+        if self.pool is not None:  # what the worker runs, as a fresh process would
+            return femcontact_command() + run_arguments(case)
         return case_command(case, self.study.settings["launcher"], self.ranks)
 
     def start(self, case: Case, slot: int) -> None:
         make_dir(case.dir)
         command = self.command(case)
+        worker = self.pool.worker(slot) if self.pool is not None else None
         try:
             (case.dir / "result.json").unlink(missing_ok=True)
             write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
             write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
-                                                         "slot": slot, "started": time.time()})
+                                                         "slot": slot, "worker": worker and worker.pid,
+                                                         "started": time.time()})
             log = open(case.dir / "log.txt", "wb")
         except OSError as error:
             raise WriteError(describe(error, case.dir)) from None
+        if worker is not None:  # the worker appends to the log just emptied
+            log.close()
+            worker.submit(case.dir.resolve(), run_arguments(case))
+            self.running.append(Job(case, worker.process, slot, time.monotonic(), worker=worker))
+            return
         with log:
             try:
                 process = subprocess.Popen(command, cwd=case.dir, stdout=log, stderr=subprocess.STDOUT,
-                                           env=launch_environment(self.cache_root / f"slot-{slot}"),
+                                           env=self.environment(slot),
                                            stdin=subprocess.DEVNULL, start_new_session=True,
                                            preexec_fn=functools.partial(_die_with_parent, os.getpid()))
             except OSError as error:
@@ -412,7 +458,8 @@ class Runner:
         finished, limit = [], self.study.settings["time_limit"]
         for job in list(self.running):
             elapsed = time.monotonic() - job.started
-            if job.process.poll() is None:
+            code = job.exit_code()
+            if code is None:
                 if elapsed > limit and not job.killed:
                     job.killed = f"time limit of {limit:g} s exceeded"
                     _signal_group(job.process, signal.SIGTERM)
@@ -422,7 +469,7 @@ class Runner:
             self.running.remove(job)
             result = read_result(job.case.dir) if not job.killed else None
             if result is None:  # killed, crashed or exited without a result: the runner records why
-                reason = job.killed or _exit_reason(job.process.returncode, job.case.dir / "log.txt")
+                reason = job.killed or _exit_reason(code, job.case.dir / "log.txt")
                 result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
                           "info": {"ranks": self.ranks}}
                 write_json_atomic(job.case.dir / "result.json", result)
@@ -443,6 +490,11 @@ class Runner:
                 _signal_group(job.process, signal.SIGKILL)
                 job.process.wait()
         self.running.clear()
+        self.close_workers()
+
+    def close_workers(self) -> None:
+        if self.pool is not None:
+            self.pool.close()
 
     def run(self, cases: list[Case], prefixes: list[Case]) -> None:
         """Run the prefixes and cases; a case whose prefix failed is recorded failed without running."""
@@ -478,6 +530,7 @@ class Runner:
                     self._finish(case, result)
             self.progress.update(self.running)
             time.sleep(0.02)
+        self.close_workers()
 
     def _finish(self, case: Case, result: dict) -> None:
         self.database.record(case)

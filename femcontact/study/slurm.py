@@ -14,7 +14,6 @@ manifest (array index -> case) and a line of `submissions.json`. `squeue` tells
 which recorded array tasks are still pending or running; those cases are never
 submitted twice. See docs/slurm.md.
 """
-import fcntl
 import json
 import math
 import os
@@ -31,7 +30,7 @@ from femcontact.errors import InputError
 from femcontact.io import make_dir, write_text_atomic
 from femcontact.io import write_json_atomic as _write_json
 from femcontact.study.runner import (Case, Study, _describe, _exit_reason, _signal_group, case_command, provenance,
-                                     read_result, remove_unfinished_compilations, to_toml)
+                                     read_result, remove_unfinished_compilations, take_slot, to_toml)
 
 ACTIVE = {"PENDING", "RUNNING", "CONFIGURING", "COMPLETING", "SUSPENDED", "REQUEUED", "REQUEUE_HOLD",
           "REQUEUE_FED", "RESIZING", "SIGNALING", "STAGE_OUT"}
@@ -256,21 +255,6 @@ def status(study: Study, stream=None) -> dict:
 
 # -- one array task -------------------------------------------------------------------------------
 
-def take_slot(cache_root: Path):
-    """The first JIT cache slot (`slurm-slot-K`) no other task on this file system holds; returns
-    (K, the open lock file, held until the task ends)."""
-    cache_root.mkdir(parents=True, exist_ok=True)
-    slot = 0
-    while True:
-        lock = open(cache_root / f"slurm-slot-{slot}.lock", "w")
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            return slot, lock
-        except BlockingIOError:
-            lock.close()
-            slot += 1
-
-
 def run_task(manifest_path: Path, index: int) -> int:
     """Run entry `index` of a manifest in its case directory, as the local runner runs a case: the case
     writes result.json; a case that exits without one, or overruns the study's time limit, is recorded
@@ -294,12 +278,12 @@ def run_task(manifest_path: Path, index: int) -> int:
                 "metrics": {}, "timings": {}, "info": {}})
             return 1
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femcontact-jit"
-    slot, lock = take_slot(cache)
-    remove_unfinished_compilations(cache, f"slurm-slot-{slot}")
+    slot, lock = take_slot(cache, "slurm-slot")
+    remove_unfinished_compilations(cache, slot)
     (case_dir / "result.json").unlink(missing_ok=True)
     _write_json(case_dir / "runner.json", {**versions, "command": task["command"], "ranks": ranks,
-                                           "slot": f"slurm-slot-{slot}", "slurm": slurm, "started": time.time()})
-    env = {**os.environ, "XDG_CACHE_HOME": str(cache / f"slurm-slot-{slot}"), "PYTHONUNBUFFERED": "1"}
+                                           "slot": slot, "slurm": slurm, "started": time.time()})
+    env = {**os.environ, "XDG_CACHE_HOME": str(cache / slot), "PYTHONUNBUFFERED": "1"}
     stop = []
     previous = signal.signal(signal.SIGTERM, lambda signum, frame: stop.append(signum))
     start = time.monotonic()

@@ -1,6 +1,7 @@
 """Stand-in for `[mpirun -n K] femcontact run scene.toml --out DIR --quiet` in the study runner's tests.
 
 Usage: fake_case.py [-n K] FEMCONTACT run SCENE --out DIR [--quiet] [--checkpoint] [--restart DIR]
+(or, in a warm worker, `fake_case:worker_main`)
 (`-n K` imitates a launcher; FEMCONTACT, the program the runner asks for, is ignored.)
 
 Writes DIR/result.json like `femcontact run` (atomically, last) with metrics computed
@@ -73,6 +74,11 @@ def main(argv):
         finally:
             tmp.unlink(missing_ok=True)  # as `femcontact run`: no temporary left on a full disk
     return 1 if failed else 0
+
+
+def worker_main(argv):
+    """main() as a study's warm worker calls it (femcontact/study/workers.py): femcontact's arguments."""
+    return main(["femcontact", *argv])
 
 
 if __name__ == "__main__":

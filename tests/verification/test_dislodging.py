@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from femcontact.scenarios.dislodging import frame_time, one_dof_thresholds, pull_impulse
-from femcontact.scenarios.dynamics import DynamicSimulation, Event, kinks, pulse_integral
+from femcontact.scenarios.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
+                                          pulse_integral)
 from femcontact.solver.loading import Schedule, pulse
 from femcontact.config.scene import resolve
 
@@ -87,6 +88,32 @@ def test_frame_quantisation():
     assert frame_time(0.015, 0.005) == pytest.approx(0.015)
     assert list(kinks({"amplitude": "pulse", "duration": 0.1, "pulse": {"frequency": 20.0, "duty": 1.0}})) == \
         pytest.approx([0.0, 0.025, 0.05, 0.075, 0.1])
+
+
+def test_increments_end_on_the_marks_and_are_never_slivers():
+    """The 50 Hz pulse step (kinks every 10 ms, settle checks every 20 ms) stepped as `integrate`
+    steps it: dt doubles after each increment up to 5 ms, and is cut now and then by the
+    factors a failed Newton (1/4) or a lift cut (0.05-0.5) uses. Every mark is an increment's
+    end exactly, the step ends exactly at its duration, and no increment is shorter than
+    dt_min (1e-8 s). (Summing t += dt instead, the case 2 50 Hz pull drifted off the marks by
+    3.7e-11 s and ended on an increment of that length, where Newton cannot converge.)"""
+    step = {"amplitude": "pulse", "duration": 0.1, "pulse": {"frequency": 50.0, "duty": 1.0}}
+    dt_min, dt_max = 1e-8, 5e-3
+    checks = list(np.arange(1, 6) * 0.02)
+    marks = increment_marks(np.r_[kinks(step), checks, 0.1 - dt_min / 3], 0.1, dt_min)
+    assert marks[-1] == 0.1 and np.all(np.diff(marks) >= dt_min) and len(marks) == 10
+    rng = np.random.default_rng(7)
+    for start_dt in (1.5625e-4, 3.1e-4 / 3, dt_max):
+        t, dt, ends = 0.0, start_dt, []
+        while t < 0.1:
+            end = increment_end(t, dt, marks, dt_min)
+            assert end - t >= dt_min * (1 - 1e-6)  # dt_min itself, to round-off
+            if rng.random() < 0.3:  # a cut: the increment is redone shorter
+                dt = max((end - t) * rng.choice([0.25, 0.05, 0.37, 0.5]), dt_min)
+                continue
+            t, dt = end, min(2 * (end - t), dt_max)
+            ends.append(t)
+        assert t == 0.1 and set(marks) <= set(ends)
 
 
 def test_one_dof_thresholds():

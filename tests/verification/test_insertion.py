@@ -156,6 +156,38 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
     tip0, centre0 = np.array([0.0, 0.0, -2.0]), np.array([0.0, 0.0, 8.0])
     tip = centre0 + q[:3] + R @ (tip0 - centre0)
     assert [row["tip_x"], row["tip_y"], row["tip_z"]] == pytest.approx(tip, abs=1e-9)
+    axis = R @ (centre0 - tip0) / 10.0  # the peg axis, tip to centre
+    assert row["tilt_xz_deg"] == pytest.approx(math.degrees(math.atan2(-axis[0], axis[2])), abs=1e-9)
+
+
+def test_rounded_tip_maps_to_the_sharp_peg_with_its_tip_raised():
+    """scenarios.insertion.analytic_problem treats a tip rounded with radius rho as the analytic tier's
+    sharp peg with its tip rho higher. Exact two-point geometry of the rounded peg (the rounding's
+    centre rho from the left wall, the hole's right edge on the right side at l' from the tip), solved
+    for the tilt, against the sharp tier's D = d cos theta + l sin theta at l = l' - rho: the two
+    differ by rho (1 - cos theta) in D, so the tilts by that over dD/dtheta (measured: to 2 %):
+    1 % of the tilt at l' = 2.5 mm, 0.05 % at 8 mm (d 10, D 10.1, rho 0.5)."""
+    from scipy.optimize import brentq
+
+    from femcontact.references.whitney import two_point_tilt
+    from femcontact.scenarios.insertion import analytic_problem
+
+    d, D, rho, r = 10.0, 10.1, 0.5, 5.0
+    for l_side in (2.5, 4.0, 6.0, 8.0):
+        def wall_gap(theta):  # rounding centre minus its contact position, peg leaning to +x (theta < 0)
+            n, a = np.array([math.cos(theta), math.sin(theta)]), np.array([-math.sin(theta), math.cos(theta)])
+            tip = np.array([D / 2, 0.0]) - r * n - l_side * a
+            return (tip - (r - rho) * n + rho * a)[0] - (-D / 2 + rho)
+        exact = brentq(wall_gap, -0.1, 0.0)  # the first root below 0: l_crit < l' - rho
+        sharp, l = two_point_tilt(d, D, l_side - rho), l_side - rho
+        # D differs by rho (1 - cos theta): the tilt by that over dD/dtheta = l cos theta - d sin theta
+        assert sharp - abs(exact) == pytest.approx(rho * (1 - math.cos(sharp)) / (l * math.cos(sharp) - d * math.sin(sharp)),
+                                                   rel=0.05)
+        assert sharp - abs(exact) < 0.011 * sharp
+    scene = load_scene(SCENE, ["peg.corner_radius=0.5", "peg.tilt=-3.0", "peg.offset=0.0"])
+    problem, offset = analytic_problem(scene)
+    assert problem.lg == pytest.approx(10.0 - 0.5) and offset == pytest.approx(0.5 * math.cos(math.radians(3)))
+    assert problem.lateral_error == pytest.approx(0.5 * math.sin(math.radians(3)))
 
 
 def test_rcc_support_is_the_truss_models_linear_stiffness():

@@ -25,11 +25,11 @@ COARSE = ["spring.count=1", "mesh.resolution=0.6"]
 
 def simulate(overrides: list[str]) -> dict:
     """Metrics of the contract scene with overrides, run in this process."""
-    from femcontact.scenarios.snap_fit import snap_fit_metrics
+    from femcontact.scenarios.snap_fit import run, snap_fit_metrics
     from femcontact.solver.stepping import Simulation
 
     simulation = Simulation(load_scene(SCENE, COARSE + overrides))
-    simulation.run()
+    run(simulation)
     return snap_fit_metrics(simulation)
 
 
@@ -97,20 +97,27 @@ def test_large_deflection_departs_from_the_rigid_arm_as_the_elastica_does():
     assert large["final_contact_force"] / small["final_contact_force"] == pytest.approx(elastica / linear, rel=2e-2)
 
 
-@pytest.mark.parametrize("angle, expected", [(55.0, False), (80.0, True)])
+@pytest.mark.parametrize("angle, expected", [(55.0, False), (70.0, True), (80.0, True)])
 def test_jamming_where_the_friction_cone_says(angle, expected):
     """mu = 0.3 (phi = 16.7 deg). 80 deg: the insertion force lies inside the friction cone
-    (alpha + phi > 90 deg) and the apex sticks on the nose; 55 deg slides. (Between 65.6 and
-    73.3 deg the reduced model jams, 1.5 (e/L) tan(alpha + phi) >= 1, the plain cone does not;
-    there Newton cycles between stick and slip, docs/snap_fit.md.) A short push, 0.015 mm past
-    first touch in 0.0035 mm increments: the 80-degree nose's working part is only 0.026 mm long."""
+    (alpha + phi > 90 deg) and the apex sticks on the nose; 55 deg slides. 70 deg lies between
+    the reduced model's bound, 1.5 (e/L) tan(alpha + phi) >= 1 (65.6 deg), and the plain cone
+    (73.3 deg): there is no sliding equilibrium, Newton cycles between stick and slip, and the
+    run ends as a jam (`run`: the stuck apex is an equilibrium, its force inside the cone). A short
+    push, 0.015 mm past first touch in 0.0035 mm increments: the 80-degree nose's working part is
+    only 0.026 mm long."""
     H = 0.15 if angle > 60 else 0.5
     m = simulate([f"peg.nose_angle={angle}", "contact.mu=0.3", f"peg.nose_length={H}", "peg.start_gap=0.02",
                   "steps.0.motion.y=-0.035", "steps.0.increments=10", "steps.1.motion.y=-0.035",
-                  "steps.1.increments=1"])
+                  "steps.1.increments=1", "solver.max_cuts=3"])
     assert m["jammed"] is expected
     assert m["model_jammed"] is expected
     assert m["cone_jammed"] is (angle + math.degrees(math.atan(0.3)) >= 90)
+    if expected:
+        assert "inside the friction cone" in m["jam_reason"] and 0 < m["jam_depth"] < 0.015
+    else:
+        assert m["jam_reason"] is None and m["stopped"] == ""
+    assert (m["stopped"] != "") is (angle == 70.0)  # only the case without a sliding equilibrium is stopped
 
 
 def test_bad_nose_is_refused():
