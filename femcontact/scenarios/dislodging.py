@@ -85,24 +85,33 @@ def one_dof_thresholds(N_A: float, T_A: float, N_B: float, T_B: float, tilt: flo
 
 # -- one case ----------------------------------------------------------------------------------
 
+def wedged_simulation(scene: dict, restart=None, checkpoint=None):
+    """The wedged peg of `scene` (its steps before the pull, or read from the checkpoint
+    `restart`; saved to `checkpoint` if given), with pull and observe steps appended for the
+    pulls to set: (the DynamicSimulation, the wedging wall time in s)."""
+    from femcontact.scenarios.dynamics import DynamicSimulation
+
+    sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
+    start = time.perf_counter()
+    first = sim.load_checkpoint(restart) if restart else 0
+    for index in range(first, min(PULL_STEP, len(scene["steps"]))):
+        sim.run_step(index, scene["steps"][index])
+    wedge_time = time.perf_counter() - start
+    if checkpoint:
+        sim.save_checkpoint(checkpoint)
+    steps = sim.scene["steps"]
+    while len(steps) <= OBSERVE_STEP:  # the wedging prefix alone: pull and observe steps to set later
+        steps.append({**copy.deepcopy(steps[PULL_STEP - 1]), "name": ("pull", "observe")[len(steps) - PULL_STEP]})
+    return sim, wedge_time
+
+
 class Puller:
     """The wedged peg of one scene and its pulls, each restarting from the wedged state."""
 
     def __init__(self, scene: dict, restart=None, checkpoint=None, held_pullout: bool = True):
-        from femcontact.scenarios.dynamics import DynamicSimulation
-
         self.scene, self.settings = scene, scene["dislodging"]
-        self.simulation = sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
-        start = time.perf_counter()
-        first = sim.load_checkpoint(restart) if restart else 0
-        for index in range(first, min(PULL_STEP, len(scene["steps"]))):
-            sim.run_step(index, scene["steps"][index])
-        self.wedge_time = time.perf_counter() - start
-        if checkpoint:
-            sim.save_checkpoint(checkpoint)
-        steps = sim.scene["steps"]
-        while len(steps) <= OBSERVE_STEP:  # the wedging prefix alone: pull and observe steps to set later
-            steps.append({**copy.deepcopy(steps[PULL_STEP - 1]), "name": ("pull", "observe")[len(steps) - PULL_STEP]})
+        self.simulation, self.wedge_time = wedged_simulation(scene, restart, checkpoint)
+        sim = self.simulation
         self.wedged_row = sim.history[-1]
         self.wedged = sim.snapshot()
         self.tilt = sim.problem.rigid.tilt()

@@ -24,14 +24,14 @@ thresholds by bisection).
 """
 import copy
 import csv
-import json
 import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from femcontact.scenarios.dislodging import OBSERVE_STEP, PULL_STEP, PULLOUT_FILE, Puller, one_dof_thresholds
+from femcontact.scenarios.dislodging import (OBSERVE_STEP, PULL_STEP, Puller, one_dof_thresholds,
+                                            wedged_simulation)
 from femcontact.solver.loading import Schedule
 
 SHAPES = ("triangle", "square", "haversine")
@@ -289,20 +289,9 @@ class Wedge3D:
     """The wedged 3-D peg (quasi-static, no inertia) and its pull-out along its axis."""
 
     def __init__(self, scene: dict, restart=None, checkpoint=None):
-        from femcontact.scenarios.dynamics import DynamicSimulation
-
         self.scene, self.settings = scene, scene["dislodging"]
-        self.simulation = sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
-        start = time.perf_counter()
-        first = sim.load_checkpoint(restart) if restart else 0
-        for index in range(first, min(PULL_STEP, len(scene["steps"]))):
-            sim.run_step(index, scene["steps"][index])
-        self.wedge_time = time.perf_counter() - start
-        if checkpoint:
-            sim.save_checkpoint(checkpoint)
-        steps = sim.scene["steps"]
-        while len(steps) <= OBSERVE_STEP:
-            steps.append({**copy.deepcopy(steps[PULL_STEP - 1]), "name": ("pull", "observe")[len(steps) - PULL_STEP]})
+        self.simulation, self.wedge_time = wedged_simulation(scene, restart, checkpoint)
+        sim = self.simulation
         rigid = sim.problem.rigid
         self.wedged_row, self.wedged = sim.history[-1], sim.snapshot()
         self.axis = rigid_axis(rigid)
