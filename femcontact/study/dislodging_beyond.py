@@ -127,6 +127,12 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    def save(fig, name: str) -> None:
+        fig.tight_layout()
+        paths.append(out / name)
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+
     paths = []
     if degrees:
         base = {"peg.width": 50.0, "clearance_mm": 0.05, "peg.insertion_depth": 7.0, "contact.mu": 0.2,
@@ -143,10 +149,7 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
         axes[0].set_ylabel("pull-out / (mu (N_A + N_B))")
         axes[0].legend(fontsize=8)
         fig.suptitle("Degree of wedging (2-D, thesis case 1 base, one key changed at a time)")
-        fig.tight_layout()
-        paths.append(out / "degree_of_wedging.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        save(fig, "degree_of_wedging.png")
     if pulls:
         fig, ax = plt.subplots(figsize=(7, 4.5))
         for k, method in enumerate(LOADS):
@@ -161,10 +164,7 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
         ax.set_title("Impulse against peak force: the dislodging pulls of each bisection")
-        fig.tight_layout()
-        paths.append(out / "impulse_vs_peak_force.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        save(fig, "impulse_vs_peak_force.png")
     if trials:
         import numpy as np
 
@@ -194,10 +194,7 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
         fig.suptitle(f"Objective over frequency and duty at the grid's peak force; red: Nelder-Mead pulls "
                      f"(their own peak force); optimum {optimum['shape']} {optimum['pulse_hz']:.3g} Hz, duty "
                      f"{optimum['duty']:.3g}, {optimum['peak_force_N']:.3g} N" if optimum else "", fontsize=9)
-        fig.tight_layout()
-        paths.append(out / "objective_frequency_duty.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        save(fig, "objective_frequency_duty.png")
     return paths
 
 
