@@ -119,10 +119,11 @@ def test_optimum_is_verified_by_a_fresh_simulation(wedged):
 
 def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
     """A tiny peak-force optimisation (square pulses, 3 Nelder-Mead evaluations of a bisection
-    to 0.1 N): every evaluation's threshold lies at or above the quasi-static pull-out P (no
-    pulse gets a wedged peg out with less than the force that holds it statically; 1e-9
-    allowed), the optimum is the least of them, and a fresh simulation from the checkpoint
-    dislodges at the optimal peak and not one bracket below it."""
+    to 0.1 N): no evaluation's threshold lies more than one bisection step (0.1 N) below the
+    quasi-static pull-out P (a pulse does not get the wedged peg out with much less than the
+    force that holds it statically; repeated square pulses at P itself do ratchet it out in
+    make dislodging_beyond_frequency), the optimum is the least of them, and a fresh simulation
+    from the checkpoint dislodges at the optimal peak and not one bracket below it."""
     from femcontact.scenarios.dislodging_beyond import optimise_peak, verify_peak
 
     scene, puller, checkpoint = wedged
@@ -131,7 +132,7 @@ def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
     optimum = optimise_peak(puller, rows)
     pullout = puller.pullout["quasi_static_pullout_N"]
     thresholds = [e["threshold_force_N"] for e in optimum["all_evaluations"]]
-    assert len(thresholds) == 3 and min(thresholds) >= pullout * (1 - 1e-9)
+    assert len(thresholds) == 3 and min(thresholds) >= pullout - 0.1
     assert optimum["objective_peak_force_N"] == min(thresholds) and optimum["bracket_N"] <= 0.1 * (1 + 1e-9)
     checked = verify_peak(scene, checkpoint, optimum)
     assert checked["verified_dislodged"] and checked["verified_below_holds"]
