@@ -335,7 +335,8 @@ def main(argv=None) -> int:
     lines += ["", "Plots: " + ", ".join(p.name for p in paths)]
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print(f"dislodging_beyond: {len(degrees)} wedged states, {len(methods)} methods, "
-          f"optimum {'yes' if optimum else 'no'}, {len(three)} 3-D rows -> {out}")
+          f"{len(by_frequency)} methods x frequencies, impulse optimum {'yes' if optimum else 'no'}, peak-force "
+          f"optimum {'yes' if peak else 'no'}, {len(three)} 3-D rows -> {out}")
     return 0
 
 
