@@ -24,10 +24,10 @@ export OPENBLAS_NUM_THREADS := 1
 export PYVISTA_OFF_SCREEN := true
 
 STUDY_FILES := $(wildcard studies/*.toml)
-STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d,$(basename $(notdir $(STUDY_FILES))))
+STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean dislodging_beyond dislodging_beyond_3d $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -106,10 +106,12 @@ clean:
 	rm -rf results
 
 # Beyond the thesis' dislodging (issue 14): studies/dislodging_beyond_2d.toml, then
-# results/dislodging_beyond/; `make dislodging_beyond_3d` adds the 3-D pull-out (2 ranks, long).
+# results/dislodging_beyond/; `make dislodging_beyond_3d` adds the 3-D thresholds (2 ranks),
+# `make dislodging_beyond_frequency` the ways out at 10 and 200 Hz and the peak-force optimum.
 dislodging_beyond: STUDY_FILE := studies/dislodging_beyond_2d.toml
 dislodging_beyond_3d: STUDY_FILE := studies/dislodging_beyond_3d.toml
-dislodging_beyond dislodging_beyond_3d: setup
+dislodging_beyond_frequency: STUDY_FILE := studies/dislodging_beyond_frequency.toml
+dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency: setup
 	@status=0; $(FEMCONTACT) study $(STUDY_FILE) $(STUDY_FLAGS) || status=$$?; \
 	  if [ $$status -gt 1 ]; then exit $$status; fi; \
 	  $(PY) -m femcontact.study.dislodging_beyond || exit $$?; exit $$status

@@ -13,9 +13,10 @@ BEYOND = {
     **DISLODGING,
     "task": Field("str", "wedge", "'wedge': the wedged state, its quasi-static pull-out and degree of wedging; "
                   "'threshold': threshold peak of `method` by bisection; 'optimise': the pulse minimising the "
-                  "impulse to dislodge; 'pullout_3d': quasi-static pull-out along the axis of a 3-D peg and the torque about "
-                  "it at which it turns",
-                  choices=("wedge", "threshold", "optimise", "pullout_3d")),
+                  "impulse to dislodge; 'optimise_peak': the pulse minimising the threshold peak force; 'pullout_3d': "
+                  "quasi-static pull-out along the axis of a 3-D peg and the torques about it and across it at which "
+                  "it turns",
+                  choices=("wedge", "threshold", "optimise", "optimise_peak", "pullout_3d")),
     "method": Field("str", "pulse", "'continuous' (constant vertical pull), 'pulse' (vertical pulse train), "
                     "'shake' (lateral pulses at the peg top, in the direction that turns the peg against the "
                     "wedging moment), 'twist' (moment pulses about the out-of-plane axis, against the wedging "
@@ -34,6 +35,9 @@ BEYOND = {
     "grid_magnitude": Field("float", 2.0, "task 'optimise': peak force of the grid, in multiples of the pull-out",
                             positive=True),
     "evaluations": Field("int", 8, "task 'optimise': Nelder-Mead evaluations per shape after the grid", min=1),
+    "peak_shapes": Field("strs", list(SHAPES), "task 'optimise_peak': pulse shapes searched", choices=SHAPES),
+    "peak_evaluations": Field("int", 6, "task 'optimise_peak': Nelder-Mead evaluations (each a bisection for the "
+                              "threshold peak) per shape", min=3),
     "lift": Field("float", 1e-3, "quasi-static pull-out: the wedge holds while the peg lifts less than this (mm)",
                   positive=True),
 }

@@ -17,10 +17,14 @@ thresholds by bisection).
 - Pulse optimisation: frequency, duty, shape and peak force minimising the impulse to
   dislodge: a grid over frequency x duty per shape, then bounded Nelder-Mead (scipy) from the
   best grid point of each shape; the optimum re-run by a fresh simulation from the checkpoint.
-- 3-D: quasi-static pull-out of the wedged cylinder along its axis and the torque about the
-  axis at which it turns, by bisection, both in the one process that wedged it (a checkpoint
-  written on 2 ranks did not restore: the 3-D mesh was partitioned differently in the next
-  process); its 2-D estimates from the 3-D contact forces.
+- Peak-force optimisation: frequency and duty minimising the threshold peak force (a bisection
+  per evaluation) for each shape, by bounded Nelder-Mead; the optimum re-run by a fresh
+  simulation at its peak (dislodges) and one bracket below it (holds).
+- 3-D: quasi-static thresholds of the wedged cylinder, by bisection: the force along its axis,
+  the torque about the axis and the torque across it (against the wedging moment), all in the
+  one process that wedged it (a checkpoint written on 2 ranks did not restore: the 3-D mesh was
+  partitioned differently in the next process); every probe streamed to probes_3d.csv and read
+  back when the case is run again; its 2-D estimates from the 3-D contact forces.
 """
 import copy
 import csv
@@ -271,6 +275,59 @@ def verify(scene: dict, restart, optimum: dict) -> dict:
             "verified_relative_difference": abs(impulse - optimum["objective_impulse_Ns"]) / optimum["objective_impulse_Ns"]}
 
 
+def optimise_peak(puller: BeyondPuller, rows: list) -> dict:
+    """Pulse (vertical pull) minimising the threshold peak force over frequency and duty, for
+    each shape of `peak_shapes`: bounded Nelder-Mead (scipy) over (log10 Hz, duty) from the
+    middle of the bounds (log scale in frequency), `peak_evaluations` evaluations per shape,
+    each a bisection for the threshold peak (to `tolerance`). Every pull is appended to rows
+    (column `phase`: the shape's evaluation number)."""
+    from scipy.optimize import minimize
+
+    s = puller.settings
+    bounds = [tuple(np.log10(s["frequency_range"])), tuple(s["duty_range"])]
+    x0 = np.array([np.mean(bounds[0]), np.mean(bounds[1])])
+    simplex = np.clip([x0, x0 + [-0.5, 0.0], x0 + [0.0, 0.3]], *np.array(bounds).T)
+    evaluations = []
+
+    for shape in s["peak_shapes"]:
+        cache = {}
+
+        def fun(x, shape=shape, cache=cache):
+            hz, duty = 10 ** x[0], float(x[1])
+            key = (round(hz, 6), round(duty, 6))
+            if key not in cache:
+                mine = []
+                found = puller.threshold("pulse", mine, key[0], key[1], shape)
+                for row in mine:
+                    row["phase"] = f"peak {len(evaluations) + 1}"
+                rows.extend(mine)
+                evaluations.append({"shape": shape, "pulse_hz": key[0], "duty": key[1], "pulls": len(mine), **found})
+                cache[key] = found["threshold_force_N"]
+            return cache[key]
+
+        minimize(fun, x0, method="Nelder-Mead", bounds=bounds,
+                 options={"maxfev": s["peak_evaluations"], "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-6})
+    best = min(evaluations, key=lambda e: e["threshold_force_N"])
+    pullout = puller.pullout["quasi_static_pullout_N"]
+    return {"shape": best["shape"], "pulse_hz": best["pulse_hz"], "duty": best["duty"],
+            "objective_peak_force_N": best["threshold_force_N"], "peak_over_pullout": best["threshold_force_N"] / pullout,
+            "bracket_N": best["bracket_N"], "impulse_at_threshold_Ns": best["impulse_at_threshold_Ns"],
+            "dislodge_time_s": best["dislodge_time_at_threshold_s"], "evaluations": len(evaluations),
+            "pulls": len(rows), "quasi_static_pullout_N": pullout, "all_evaluations": evaluations}
+
+
+def verify_peak(scene: dict, restart, optimum: dict) -> dict:
+    """The peak-force optimum re-run by a fresh simulation (new solver, state read from the
+    checkpoint `restart`, or wedged again without one): the pulse at the optimal peak must
+    dislodge and the same pulse one bisection bracket weaker must not."""
+    fresh = BeyondPuller(copy.deepcopy(scene), restart)
+    args = (optimum["pulse_hz"], optimum["duty"], optimum["shape"])
+    at = fresh.run("pulse", optimum["objective_peak_force_N"], *args)
+    below = fresh.run("pulse", optimum["objective_peak_force_N"] - optimum["bracket_N"], *args)
+    return {"verified_dislodged": bool(at["dislodged"]), "verified_impulse_Ns": at["impulse_Ns"],
+            "verified_below_holds": not below["dislodged"], "verified_below_peak_N": below["peak_force_N"]}
+
+
 # -- 3-D quasi-static pull-out -----------------------------------------------------------------------
 
 def contacts_on_axis(row: dict, axis: np.ndarray, dim: int) -> dict:
@@ -285,50 +342,108 @@ def contacts_on_axis(row: dict, axis: np.ndarray, dim: int) -> dict:
     return {"N_A": float(on_A @ n_A), "T_A": float(on_A @ a), "N_B": float(-on_B[0]), "T_B": float(on_B[1])}
 
 
-class Wedge3D:
-    """The wedged 3-D peg (quasi-static, no inertia) and its pull-out along its axis."""
+PROBE_COLUMNS = ["method", "magnitude", "holds", "newton_iterations", "residual_N", "moved_mm", "zone_A_N", "zone_B_N",
+                 "reason", "wall_s"]
+TWISTS_3D = {"continuous": "force (N) along the peg axis, out of the hole",
+             "twist": "torque (N*mm) about the peg axis",
+             "twist_across": "torque (N*mm) about the axis across the peg (perpendicular to it, in the plane of the "
+                             "wedging moment's axis), against the wedging moment"}
 
-    def __init__(self, scene: dict, restart=None, checkpoint=None):
+
+class Wedge3D:
+    """The wedged 3-D peg (quasi-static, no inertia) and its quasi-static thresholds: a force
+    along its axis, a torque about it and a torque across it. Every probe is appended to the
+    CSV file `probes` as it is solved; probes already in it are read back, not solved again
+    (so a case stopped by its time limit resumes where it stopped, after wedging again)."""
+
+    def __init__(self, scene: dict, restart=None, checkpoint=None, probes=None):
+        from mpi4py import MPI
+
         self.scene, self.settings = scene, scene["dislodging"]
         self.simulation, self.wedge_time = wedged_simulation(scene, restart, checkpoint)
         sim = self.simulation
         rigid = sim.problem.rigid
         self.wedged_row, self.wedged = sim.history[-1], sim.snapshot()
         self.axis = rigid_axis(rigid)
+        self.across = across_axis(scene["steps"][0]["moment"], self.axis)
         self.tilt = rigid.tilt()
         self.contacts = contacts_on_axis(self.wedged_row, self.axis, 3)
+        self.comm = MPI.COMM_WORLD
+        self.probes = Path(probes) if probes else None
+        known = []
+        if self.probes and self.comm.rank == 0 and self.probes.is_file():
+            with open(self.probes, newline="") as stream:
+                known = list(csv.DictReader(stream))
+        self.known = {(row["method"], round(float(row["magnitude"]), 6)): row["holds"] == "True"
+                      for row in self.comm.bcast(known, root=0)}
+        self.resumed = len(self.known)
 
-    def holds(self, magnitude: float, method: str) -> bool:
-        """Does the wedge hold a force (N) along the peg axis ('continuous') or a torque (N*mm)
-        about it ('twist') quasi-statically? Yes when the exact Newton iteration converges from
-        the wedged state with both contact zones loaded and the peg moved by less than `lift`
-        (mm; a rotation times the peg radius)."""
+    def direction(self, method: str) -> np.ndarray:
+        """Unit vector of the force ('continuous') or torque of a method (global)."""
+        return self.across if method == "twist_across" else self.axis
+
+    def probe(self, magnitude: float, method: str) -> dict:
+        """Does the wedge hold `magnitude` of `method` (TWISTS_3D) quasi-statically? Yes when the
+        exact Newton iteration converges from the wedged state with both contact zones loaded
+        and the peg moved by less than `lift` (mm: along the axis, or the rotation about the
+        load's axis times the peg radius). Its row (PROBE_COLUMNS)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, s = self.simulation, self.settings
+        start = time.perf_counter()
         sim.resume(self.wedged)
         pull = sim.scene["steps"][PULL_STEP]
-        vector = list(magnitude * self.axis)
-        pull.update(force=vector if method == "continuous" else [], moment=vector if method == "twist" else [],
+        vector = list(magnitude * self.direction(method))
+        pull.update(force=vector if method == "continuous" else [], moment=[] if method == "continuous" else vector,
                     amplitude="step", load_point="peg_top")
         sim.schedule = Schedule(sim.scene, sim.problem.rigid, sim.schedule.points)
         duration = pull["duration"]
         load = sim.schedule.load(PULL_STEP, duration, duration)
         r0 = self.wedged["state"]["r"]
         load.motion = r0.copy()
+        row = {"method": method, "magnitude": float(magnitude), "reason": ""}
         try:
-            sim.solve(load, stabilize=False)
-        except (NewtonFailure, FloatingPointError, RuntimeError):
-            return False
-        r = sim.problem.rigid.values
-        moved = (float(np.dot(r[:3] - r0[:3], self.axis)) if method == "continuous"
-                 else float(np.dot(r[3:] - r0[3:], self.axis)) * self.scene["peg"]["width"] / 2)
-        return bool(np.all(sim.zone_forces() > 0) and abs(moved) < s["lift"])
+            row["newton_iterations"] = sim.solve(load, stabilize=False)
+            converged = True
+        except NewtonFailure as failure:
+            converged = False
+            history = failure.history or [float("nan")]
+            row.update(newton_iterations=len(history) - 1, residual_N=history[-1],
+                       reason=str(failure).split(";")[0])
+        except (FloatingPointError, RuntimeError) as error:
+            converged = False
+            row.update(reason=type(error).__name__)
+        zones = sim.zone_forces()  # of the last iterate: the converged state, or the last try
+        row.update(holds=False, moved_mm="", zone_A_N=float(zones[0]), zone_B_N=float(zones[-1]))
+        if converged:  # (a failed solve leaves the wedged state)
+            r = sim.problem.rigid.values
+            moved = (float(np.dot(r[:3] - r0[:3], self.axis)) if method == "continuous"
+                     else float(np.dot(r[3:] - r0[3:], self.direction(method))) * self.scene["peg"]["width"] / 2)
+            R_u, R_r, _ = sim.newton.current_residual(load)
+            row.update(residual_N=sim.newton.norm(R_u, R_r), moved_mm=moved,
+                       holds=bool(np.all(zones > 0) and abs(moved) < s["lift"]))
+        row["wall_s"] = time.perf_counter() - start
+        return row
+
+    def holds(self, magnitude: float, method: str) -> bool:
+        """`probe`, or its answer read back from the probes file; new probes are appended to it."""
+        key = (method, round(magnitude, 6))
+        if key not in self.known:
+            row = self.probe(key[1], method)
+            self.known[key] = row["holds"]
+            if self.probes and self.comm.rank == 0:
+                new = not self.probes.is_file()
+                with open(self.probes, "a", newline="") as stream:
+                    writer = csv.DictWriter(stream, fieldnames=PROBE_COLUMNS, extrasaction="ignore")
+                    if new:
+                        writer.writeheader()
+                    writer.writerow(row)
+        return self.known[key]
 
     def threshold(self, method: str, high: float) -> dict:
         """Largest magnitude the wedge holds, by bisection from [0, high] (high doubled until the
-        wedge lets go, at most 4 times)."""
-        tolerance = self.settings["tolerance"] * (self.scene["peg"]["width"] / 2 if method == "twist" else 1.0)
+        wedge lets go, at most 4 times) to `tolerance` (N; torques: tolerance x the peg radius)."""
+        tolerance = self.settings["tolerance"] * (self.scene["peg"]["width"] / 2 if method != "continuous" else 1.0)
         low, solves = 0.0, 1
         while self.holds(high, method):
             low, high, solves = high, 2 * high, solves + 1
@@ -344,6 +459,16 @@ class Wedge3D:
         return {"threshold": low, "bracket": high - low, "solves": solves}
 
 
+def across_axis(wedging_moment, axis: np.ndarray) -> np.ndarray:
+    """Unit axis across the peg (perpendicular to its `axis`) of the torque that turns it back
+    out of its wedge: against the wedging moment (N*mm, global), as the 2-D twist."""
+    m = -np.asarray(wedging_moment or [0.0, 0.0, 0.0], float)
+    m = m - np.dot(m, axis) * axis
+    if not np.linalg.norm(m) > 0:
+        raise ValueError("the wedging moment has no component across the peg axis")
+    return m / np.linalg.norm(m)
+
+
 def rigid_axis(rigid) -> np.ndarray:
     """The peg axis (unit, global) at the current pose."""
     from femcontact.physics.rotation import rotation_numpy
@@ -351,16 +476,21 @@ def rigid_axis(rigid) -> np.ndarray:
     return rotation_numpy(rigid.split(rigid.values)[1]) @ rigid.Q0[:, -1]
 
 
+PROBES_FILE = "probes_3d.csv"
+
+
 def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
-    s = scene["dislodging"]
+    """Task 'pullout_3d' (or the 3-D wedging prefix): the wedged cylinder and its three
+    quasi-static thresholds (TWISTS_3D), each probe streamed to `PROBES_FILE` in `case_dir`."""
     mu = scene["contact"]["mu"]
     start = time.perf_counter()
-    wedge = Wedge3D(scene, restart, Path(case_dir) / "checkpoint" if checkpoint else None)
+    wedge = Wedge3D(scene, restart, Path(case_dir) / "checkpoint" if checkpoint else None,
+                    probes=Path(case_dir) / PROBES_FILE)
     c = wedge.contacts
     metrics = {**{f"wedged_{k}": v for k, v in c.items()}, "tilt_deg": math.degrees(wedge.tilt),
                "sum_normal_N": c["N_A"] + c["N_B"], "wedge_time_s": wedge.wedge_time,
                **{f"one_dof_{k}_N": v for k, v in one_dof_thresholds(**c, tilt=wedge.tilt, mu=mu).items()}}
-    info = {"dofs": wedge.simulation.dofs, "effects": list(scene["effects"])}
+    info = {"dofs": wedge.simulation.dofs, "effects": list(scene["effects"]), "probes_resumed": wedge.resumed}
     if len(scene["steps"]) <= PULL_STEP:
         return {"metrics": metrics, "timings": {"wedge": wedge.wedge_time}, "info": info}
     friction, radius = mu * metrics["sum_normal_N"], scene["peg"]["width"] / 2
@@ -368,11 +498,15 @@ def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
     pull = wedge.threshold("continuous", 2 * metrics["one_dof_first_slip_N"])  # the 2-D pull-out: ~first slip
     metrics.update(threshold_force_N=pull["threshold"], bracket_N=pull["bracket"], pull_solves=pull["solves"],
                    degree_of_wedging=pull["threshold"] / friction, pull_time_s=time.perf_counter() - start_pull)
-    start_twist = time.perf_counter()
-    twist = wedge.threshold("twist", friction * radius)
-    metrics.update(twist_threshold_moment_Nmm=twist["threshold"], twist_bracket_Nmm=twist["bracket"],
-                   twist_solves=twist["solves"], twist_over_friction_torque=twist["threshold"] / (friction * radius),
-                   twist_time_s=time.perf_counter() - start_twist)
+    wedging = float(np.linalg.norm(scene["steps"][0]["moment"]))
+    for method, prefix in (("twist", "twist"), ("twist_across", "across")):
+        start_twist = time.perf_counter()
+        twist = wedge.threshold(method, friction * radius)
+        metrics.update({f"{prefix}_threshold_moment_Nmm": twist["threshold"], f"{prefix}_bracket_Nmm": twist["bracket"],
+                        f"{prefix}_solves": twist["solves"],
+                        f"{prefix}_over_friction_torque": twist["threshold"] / (friction * radius),
+                        f"{prefix}_over_wedging_moment": twist["threshold"] / wedging,
+                        f"{prefix}_time_s": time.perf_counter() - start_twist})
     return {"metrics": metrics, "timings": {"wedge": wedge.wedge_time, "total_case": time.perf_counter() - start},
             "info": info}
 
@@ -414,6 +548,14 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
             from femcontact.io import write_json_atomic
 
             write_json_atomic(case_dir / "optimum.json", optimum)
+    elif len(scene["steps"]) > PULL_STEP and s["task"] == "optimise_peak":
+        optimum = optimise_peak(puller, rows)
+        optimum.update(verify_peak(scene, restart, optimum))
+        metrics.update({f"optimum_{k}": v for k, v in optimum.items() if k != "all_evaluations"})
+        if MPI.COMM_WORLD.rank == 0:
+            from femcontact.io import write_json_atomic
+
+            write_json_atomic(case_dir / "optimum_peak.json", optimum)
     if rows and MPI.COMM_WORLD.rank == 0:
         with open(case_dir / "pulls.csv", "w", newline="") as stream:
             writer = csv.DictWriter(stream, fieldnames=PULL_COLUMNS, extrasaction="ignore")

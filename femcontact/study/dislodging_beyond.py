@@ -1,7 +1,9 @@
 """results/dislodging_beyond/ from the studies dislodging_beyond_2d and dislodging_beyond_3d
-(issue 14; docs/dislodging_beyond.md): degree_of_wedging.csv, methods.csv, optimum.json,
-optimum.csv (every pull of the optimisation), pullout_3d.csv, the plots and summary.md with the
-ranking of the ways out by impulse and by peak force.
+and dislodging_beyond_frequency (issue 14; docs/dislodging_beyond.md): degree_of_wedging.csv,
+methods.csv (50 Hz), methods_frequency.csv (every frequency), optimum.json (least impulse, and
+least peak force under "peak_force_optimum"), optimum.csv (every pull of the impulse
+optimisation), optimum_peak.csv (every evaluation of the peak one), pullout_3d.csv, the plots
+and summary.md with the ranking of the ways out by impulse and by peak force.
 
     python -m femcontact.study.dislodging_beyond [--results results]
 """
@@ -16,14 +18,16 @@ DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_dept
                   "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
                   "degree_of_wedging", "degree_estimate", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",
                   "one_dof_first_slip_N", "one_dof_full_slide_N"]
-METHOD_COLUMNS = ["method", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
+METHOD_COLUMNS = ["method", "pulse_hz", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
                   "dislodge_time_at_threshold_s", "least_impulse_Ns", "least_impulse_peak_N", "quasi_static_pullout_N",
                   "pulls", "loads"]
 LOADS = {"continuous": "constant vertical pull at the peg top",
-         "pulse": "vertical triangle pulses, 50 Hz",
-         "shake": "lateral triangle pulses at the peg top, 50 Hz, against the wedging moment",
-         "twist": "moment triangle pulses, 50 Hz, against the wedging moment; F = M / d (d = 50 mm)",
-         "pull_shake": "constant vertical pull 0.5 x pull-out + lateral triangle pulses, 50 Hz; F = |(F_lat, F_pull)|"}
+         "pulse": "vertical triangle pulses",
+         "shake": "lateral triangle pulses at the peg top, against the wedging moment",
+         "twist": "moment triangle pulses, against the wedging moment; F = M / d (d = 50 mm)",
+         "pull_shake": "constant vertical pull 0.5 x pull-out + lateral triangle pulses; F = |(F_lat, F_pull)|"}
+PEAK_COLUMNS = ["shape", "pulse_hz", "duty", "threshold_force_N", "bracket_N", "impulse_at_threshold_Ns",
+                "dislodge_time_at_threshold_s", "pulls"]
 
 
 def _read_csv(path: Path) -> list[dict]:
@@ -77,7 +81,8 @@ def method_rows(cases) -> tuple[list[dict], list[dict]]:
         s = case.scene["dislodging"]
         if s["task"] != "threshold" or "threshold_force_N" not in m:
             continue
-        rows.append({"method": s["method"], "threshold_over_pullout": m["threshold_force_N"] / m["quasi_static_pullout_N"],
+        rows.append({"method": s["method"], "pulse_hz": s["pulse_hz"] if s["method"] != "continuous" else "",
+                     "threshold_over_pullout": m["threshold_force_N"] / m["quasi_static_pullout_N"],
                      "loads": LOADS[s["method"]], **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
         if (case.dir / "pulls.csv").exists():
             mine = _read_csv(case.dir / "pulls.csv")
@@ -86,7 +91,7 @@ def method_rows(cases) -> tuple[list[dict], list[dict]]:
             least = min(out, key=lambda r: float(r["impulse_Ns"]))  # over the bisection's pulls that dislodged
             rows[-1].update(least_impulse_Ns=float(least["impulse_Ns"]), least_impulse_peak_N=float(least["peak_force_N"]))
     order = list(LOADS)
-    return sorted(rows, key=lambda r: order.index(r["method"])), pulls
+    return sorted(rows, key=lambda r: (float(r["pulse_hz"] or 0), order.index(r["method"]))), pulls
 
 
 def optimum_of(cases) -> tuple[dict | None, list[dict]]:
@@ -94,6 +99,17 @@ def optimum_of(cases) -> tuple[dict | None, list[dict]]:
         if case.scene["dislodging"]["task"] == "optimise" and (case.dir / "optimum.json").exists():
             return json.loads((case.dir / "optimum.json").read_text()), _read_csv(case.dir / "pulls.csv")
     return None, []
+
+
+def peak_optimum_of(cases) -> tuple[dict | None, list[dict]]:
+    """The least threshold peak over the 'optimise_peak' cases (one per set of shapes), with its
+    verification, and every evaluation of all of them."""
+    found = [json.loads((case.dir / "optimum_peak.json").read_text()) for case, m in cases
+             if case.scene["dislodging"]["task"] == "optimise_peak" and (case.dir / "optimum_peak.json").exists()]
+    if not found:
+        return None, []
+    evaluations = [e for optimum in found for e in optimum.pop("all_evaluations")]
+    return min(found, key=lambda o: o["objective_peak_force_N"]), evaluations
 
 
 def rows_3d(cases, degrees) -> list[dict]:
@@ -105,8 +121,9 @@ def rows_3d(cases, degrees) -> list[dict]:
         if "threshold_force_N" not in m:
             continue
         mu = case.scene["contact"]["mu"]
-        common = {k: m[k] for k in ("wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "sum_normal_N", "tilt_deg",
-                                    "wedge_time_s")}
+        common = {"mesh.resolution": case.scene["mesh"]["resolution"],
+                  **{k: m[k] for k in ("wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "sum_normal_N", "tilt_deg",
+                                       "wedge_time_s")}}
         row = {"method": "pull along the axis", "threshold_force_N": m["threshold_force_N"], "bracket_N": m["bracket_N"],
                "degree_of_wedging": m["degree_of_wedging"], "estimate_2d_one_dof_first_slip_N": m["one_dof_first_slip_N"],
                "solves": m["pull_solves"], "time_s": m["pull_time_s"], **common}
@@ -115,9 +132,13 @@ def rows_3d(cases, degrees) -> list[dict]:
                        estimate_2d_twin_degree_N=twin[0]["degree_of_wedging"] * mu * m["sum_normal_N"])
             row["threshold_over_2d_twin_estimate"] = m["threshold_force_N"] / row["estimate_2d_twin_degree_N"]
         out.append(row)
-        out.append({"method": "twist about the axis", "threshold_moment_Nmm": m["twist_threshold_moment_Nmm"],
-                    "bracket_Nmm": m["twist_bracket_Nmm"], "twist_over_friction_torque": m["twist_over_friction_torque"],
-                    "solves": m["twist_solves"], "time_s": m["twist_time_s"], **common})
+        for prefix, method in (("twist", "twist about the axis"), ("across", "twist across the axis")):
+            if f"{prefix}_threshold_moment_Nmm" in m:
+                out.append({"method": method, "threshold_moment_Nmm": m[f"{prefix}_threshold_moment_Nmm"],
+                            "bracket_Nmm": m[f"{prefix}_bracket_Nmm"],
+                            "over_friction_torque": m[f"{prefix}_over_friction_torque"],
+                            "over_wedging_moment": m.get(f"{prefix}_over_wedging_moment", ""),
+                            "solves": m[f"{prefix}_solves"], "time_s": m[f"{prefix}_time_s"], **common})
     return out
 
 
@@ -198,6 +219,57 @@ def plots(out: Path, degrees, methods, pulls, optimum, trials) -> list[Path]:
     return paths
 
 
+def frequency_plot(out: Path, rows: list[dict], evaluations: list[dict]) -> list[Path]:
+    """methods_frequency.png: threshold peak / pull-out and least impulse of each method against
+    the pulse frequency (the constant pull as a horizontal line), and the peak-force
+    optimiser's evaluations."""
+    pulsed = [r for r in rows if r["pulse_hz"] != ""]
+    if len({r["pulse_hz"] for r in pulsed}) < 2:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    for k, method in enumerate(LOADS):
+        mine = sorted([r for r in rows if r["method"] == method], key=lambda r: float(r["pulse_hz"] or 0))
+        for ax, key in zip(axes, ("threshold_over_pullout", "least_impulse_Ns")):
+            if method == "continuous" and mine:
+                ax.axhline(float(mine[0][key]), color=f"C{k}", ls="--", label=method)
+            elif mine:
+                ax.plot([float(r["pulse_hz"]) for r in mine], [float(r[key]) for r in mine], "o-", color=f"C{k}",
+                        label=method)
+    if evaluations:
+        pullout = float(rows[0]["quasi_static_pullout_N"])
+        axes[0].plot([e["pulse_hz"] for e in evaluations], [e["threshold_force_N"] / pullout for e in evaluations],
+                     "kx", label="peak optimiser (vertical pulses, any shape and duty)")
+    axes[0].set_ylabel("threshold peak force / quasi-static pull-out")
+    axes[1].set_ylabel("least impulse of the dislodging pulls (N s)")
+    axes[1].set_yscale("log")
+    for ax in axes:
+        ax.set_xscale("log")
+        ax.set_xlabel("pulse frequency (Hz)")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Ways out against the pulse frequency (2-D, triangle pulses, coarse mesh)")
+    fig.tight_layout()
+    fig.savefig(out / "methods_frequency.png", dpi=110)
+    plt.close(fig)
+    return [out / "methods_frequency.png"]
+
+
+def _rankings(methods: list[dict]) -> list[str]:
+    lines = []
+    for key, label in (("impulse_at_threshold_Ns", "impulse at the threshold"),
+                       ("least_impulse_Ns", "least impulse of the bisection's dislodging pulls"),
+                       ("threshold_force_N", "peak force (threshold)")):
+        ranked = sorted([r for r in methods if r.get(key, "") != ""], key=lambda r: float(r[key]))
+        lines += ["", f"Ranking by {label} (least first): " + ", ".join(f"{r['method']} ({float(r[key]):.4g})"
+                                                                           for r in ranked)]
+    return lines
+
+
 def _table(rows: list[dict], columns: list[str]) -> list[str]:
     def cell(v):
         return f"{v:.4g}" if isinstance(v, float) else str(v)
@@ -213,19 +285,26 @@ def main(argv=None) -> int:
     out = root / "dislodging_beyond"
     out.mkdir(parents=True, exist_ok=True)
     cases_2d, cases_3d = _cases("dislodging_beyond_2d", root), _cases("dislodging_beyond_3d", root)
+    cases_frequency = _cases("dislodging_beyond_frequency", root)
     degrees = degree_rows(cases_2d)
     methods, pulls = method_rows(cases_2d)
+    by_frequency, _ = method_rows(cases_2d + cases_frequency)
     optimum, trials = optimum_of(cases_2d)
+    peak, evaluations = peak_optimum_of(cases_frequency)
     three = rows_3d(cases_3d, degrees)
     _write_csv(out / "degree_of_wedging.csv", degrees, DEGREE_COLUMNS)
     _write_csv(out / "methods.csv", methods, METHOD_COLUMNS)
+    _write_csv(out / "methods_frequency.csv", by_frequency, METHOD_COLUMNS)
+    if optimum or peak:
+        (out / "optimum.json").write_text(json.dumps({**(optimum or {}), "peak_force_optimum": peak}, indent=2) + "\n")
     if optimum:
-        (out / "optimum.json").write_text(json.dumps(optimum, indent=2) + "\n")
         _write_csv(out / "optimum.csv", trials, list(trials[0]) if trials else [])
+    if evaluations:
+        _write_csv(out / "optimum_peak.csv", evaluations, PEAK_COLUMNS)
     if three:
         columns = list(dict.fromkeys(k for r in three for k in r))
         _write_csv(out / "pullout_3d.csv", three, columns)
-    paths = plots(out, degrees, methods, pulls, optimum, trials)
+    paths = plots(out, degrees, methods, pulls, optimum, trials) + frequency_plot(out, by_frequency, evaluations)
     lines = ["# Beyond the thesis' dislodging (issue 14)", "",
              "Generated by `python -m femcontact.study.dislodging_beyond`; see docs/dislodging_beyond.md.", "",
              "## Degree of wedging (2-D)", ""]
@@ -234,23 +313,30 @@ def main(argv=None) -> int:
                               "degree_estimate", "degree_of_wedging_rotation_held"])
     lines += ["", "## Ways out (2-D, thesis case 1, coarse)", ""]
     lines += _table(methods, METHOD_COLUMNS[:-1])
-    for key, label in (("impulse_at_threshold_Ns", "impulse at the threshold"),
-                       ("least_impulse_Ns", "least impulse of the bisection's dislodging pulls"),
-                       ("threshold_force_N", "peak force (threshold)")):
-        ranked = sorted(methods, key=lambda r: float(r[key]))
-        lines += ["", f"Ranking by {label} (least first): " + ", ".join(f"{r['method']} ({float(r[key]):.4g})"
-                                                                           for r in ranked)]
+    lines += _rankings(methods)
+    frequencies = sorted({r["pulse_hz"] for r in by_frequency if r["pulse_hz"] != ""} - {50.0})
+    if frequencies:
+        lines += ["", "## Ways out at other frequencies (2-D, triangle pulses)", ""]
+        lines += _table(by_frequency, METHOD_COLUMNS[:-1])
+        continuous = [r for r in by_frequency if r["method"] == "continuous"]
+        for hz in frequencies:
+            lines += ["", f"At {hz:g} Hz (with the constant pull):"]
+            lines += _rankings(continuous + [r for r in by_frequency if r["pulse_hz"] == hz])
     if optimum:
-        lines += ["", "## Optimal pulse", ""] + _table([optimum], list(optimum))
+        lines += ["", "## Optimal pulse (least impulse)", ""] + _table([optimum], list(optimum))
+    if peak:
+        lines += ["", "## Optimal pulse (least threshold peak force)", ""] + _table([peak], list(peak))
+        lines += ["", "Every evaluation (a bisection each):", ""] + _table(evaluations, PEAK_COLUMNS)
     if three:
         lines += ["", "## 3-D (quasi-static, 2 ranks)", ""] + _table(three, [c for c in (
-            "method", "threshold_force_N", "threshold_moment_Nmm", "sum_normal_N", "degree_of_wedging",
+            "method", "mesh.resolution", "threshold_force_N", "threshold_moment_Nmm", "sum_normal_N", "degree_of_wedging",
             "estimate_2d_one_dof_first_slip_N", "estimate_2d_twin_degree_N", "threshold_over_2d_twin_estimate",
-            "twist_over_friction_torque") if any(c in r for r in three)])
+            "over_friction_torque", "over_wedging_moment") if any(c in r for r in three)])
     lines += ["", "Plots: " + ", ".join(p.name for p in paths)]
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print(f"dislodging_beyond: {len(degrees)} wedged states, {len(methods)} methods, "
-          f"optimum {'yes' if optimum else 'no'}, {len(three)} 3-D rows -> {out}")
+          f"{len(by_frequency)} methods x frequencies, impulse optimum {'yes' if optimum else 'no'}, peak-force "
+          f"optimum {'yes' if peak else 'no'}, {len(three)} 3-D rows -> {out}")
     return 0
 
 

@@ -88,20 +88,95 @@ def test_scene_keys_are_checked():
         load_scene(SCENE, ["dislodging.task=pullout_3d"])
 
 
-def test_optimum_is_verified_by_a_fresh_simulation():
-    """A tiny optimisation on the coarse wedged peg (one grid point per shape, 2 Nelder-Mead
-    pulls each): the best pulse dislodges, and a fresh simulation (new solver, wedged again)
-    reproduces its impulse (the pulls are deterministic: only the solver's tolerance differs,
-    1e-6 allowed)."""
-    from femcontact.scenarios.dislodging_beyond import BeyondPuller, optimise, verify
+@pytest.fixture(scope="module")
+def wedged(tmp_path_factory):
+    """The coarse wedged peg (resolution 0.5, thesis case 1), its puller and the checkpoint of
+    its wedged state and quasi-static pull-out, from which the verifying runs start afresh."""
+    from femcontact.scenarios.dislodging_beyond import BeyondPuller
 
-    overrides = ["dislodging.task=optimise", "dislodging.grid_hz=[50.0]", "dislodging.grid_duty=[1.0]",
-                 "dislodging.evaluations=2", "dislodging.tolerance=0.05"]
-    scene = load_scene(SCENE, overrides)
+    checkpoint = tmp_path_factory.mktemp("wedged") / "checkpoint"
+    scene = load_scene(SCENE, ["dislodging.task=optimise"])
+    return scene, BeyondPuller(scene, checkpoint=checkpoint), checkpoint
+
+
+def test_optimum_is_verified_by_a_fresh_simulation(wedged):
+    """A tiny optimisation on the coarse wedged peg (one grid point per shape, 2 Nelder-Mead
+    pulls each): the best pulse dislodges, and a fresh simulation (new solver, state read from
+    the checkpoint) reproduces its impulse (the pulls are deterministic: only the solver's
+    tolerance differs, 1e-6 allowed)."""
+    from femcontact.scenarios.dislodging_beyond import optimise, verify
+
+    scene, puller, checkpoint = wedged
+    puller.settings.update(grid_hz=[50.0], grid_duty=[1.0], evaluations=2)
     rows = []
-    optimum = optimise(BeyondPuller(scene), rows)
+    optimum = optimise(puller, rows)
     assert len(rows) == optimum["evaluations"] and optimum["objective_impulse_Ns"] == min(r["objective_Ns"] for r in rows)
     best = min(rows, key=lambda r: r["objective_Ns"])
     assert best["dislodged"] and optimum["shape"] == best["shape"]
-    checked = verify(scene, None, optimum)
+    checked = verify(scene, checkpoint, optimum)
     assert checked["verified_dislodged"] and checked["verified_relative_difference"] < 1e-6
+
+
+def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
+    """A tiny peak-force optimisation (square pulses, 3 Nelder-Mead evaluations of a bisection
+    to 0.1 N): no evaluation's threshold lies more than one bisection step (0.1 N) below the
+    quasi-static pull-out P (a pulse does not get the wedged peg out with much less than the
+    force that holds it statically; repeated square pulses at P itself do ratchet it out in
+    make dislodging_beyond_frequency), the optimum is the least of them, and a fresh simulation
+    from the checkpoint dislodges at the optimal peak and not one bracket below it."""
+    from femcontact.scenarios.dislodging_beyond import optimise_peak, verify_peak
+
+    scene, puller, checkpoint = wedged
+    puller.settings.update(peak_shapes=["square"], peak_evaluations=3, tolerance=0.1)
+    rows = []
+    optimum = optimise_peak(puller, rows)
+    pullout = puller.pullout["quasi_static_pullout_N"]
+    thresholds = [e["threshold_force_N"] for e in optimum["all_evaluations"]]
+    assert len(thresholds) == 3 and min(thresholds) >= pullout - 0.1
+    assert optimum["objective_peak_force_N"] == min(thresholds) and optimum["bracket_N"] <= 0.1 * (1 + 1e-9)
+    checked = verify_peak(scene, checkpoint, optimum)
+    assert checked["verified_dislodged"] and checked["verified_below_holds"]
+
+
+def test_torque_across_the_peg_axis_is_against_the_wedging_moment():
+    """3-D twist across the axis: the unit axis perpendicular to the peg's, opposite to the
+    wedging moment (My = -1000 N*mm tilts the peg further: the unwedging torque is +y)."""
+    from femcontact.scenarios.dislodging_beyond import across_axis
+
+    tilt = np.radians(1.4)
+    axis = np.array([-np.sin(tilt), 0.0, np.cos(tilt)])  # top leaning to -x, in the x-z plane
+    assert across_axis([0.0, -1000.0, 0.0], axis) == pytest.approx([0.0, 1.0, 0.0], abs=1e-15)
+    skew = across_axis([0.0, -1000.0, 300.0], axis)  # a component along the axis is dropped
+    assert abs(skew @ axis) < 1e-15 and skew @ [0.0, 1.0, 0.0] > 0 and np.linalg.norm(skew) == pytest.approx(1.0)
+    with pytest.raises(ValueError):
+        across_axis([0.0, 0.0, 0.0], axis)
+
+
+def test_3d_probes_stream_to_csv_and_resume(tmp_path):
+    """The 3-D wedged cylinder on its coarse mesh (resolution 0.3, 1 rank): a small torque
+    across the axis against the wedging moment is held (elastic, both contacts loaded), four
+    times the friction torque mu (N_A + N_B) d / 2 is not; each probe is in probes_3d.csv
+    as soon as it is solved, and a new Wedge3D on the same file answers from it without solving."""
+    from femcontact.scenarios.dislodging_beyond import PROBES_FILE, Wedge3D
+
+    scene = load_scene(SCENE.with_name("dislodging_beyond_3d.toml"), ["mesh.resolution=0.3"])
+    probes = tmp_path / PROBES_FILE
+    wedge = Wedge3D(scene, probes=probes)
+    c = wedge.contacts
+    friction_torque = scene["contact"]["mu"] * (c["N_A"] + c["N_B"]) * scene["peg"]["width"] / 2
+    assert wedge.holds(0.05 * friction_torque, "twist_across")
+    assert not wedge.holds(4 * friction_torque, "twist_across")
+    import csv
+
+    with open(probes, newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert [(r["method"], r["holds"]) for r in rows] == [("twist_across", "True"), ("twist_across", "False")]
+    assert float(rows[0]["moved_mm"]) < scene["dislodging"]["lift"] and float(rows[0]["zone_A_N"]) > 0
+
+    class Resumed(Wedge3D):
+        def probe(self, magnitude, method):
+            raise AssertionError("solved again")
+
+    again = Resumed(scene, probes=probes)
+    assert again.resumed == 2
+    assert again.holds(0.05 * friction_torque, "twist_across") and not again.holds(4 * friction_torque, "twist_across")
