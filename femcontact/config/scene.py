@@ -184,6 +184,9 @@ SOLVER = {
                        "'extrapolate' (plus the last increment's displacement change, scaled by dt, within a step): "
                        "a contact that opens under prescribed motion (a withdrawal) then starts closed",
                        choices=("none", "extrapolate")),
+    "contact_update": Field("bool", True, "where the bulk stiffness does not depend on the state (small strain), "
+                            "factor it once and add the contact's few rows by a low-rank update (Woodbury); "
+                            "off: factor the whole Jacobian every Newton iteration"),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }

@@ -5,8 +5,9 @@ Each iteration solves the bordered system
     [K_uu  K_ur] [du]     [R_u]
     [K_ru  K_rr] [dr] = - [R_r]
 
-by eliminating the few rigid unknowns with a Schur complement: one factorisation of
-K_uu serves the residual and the n_r columns of K_ur, then the small dense system
+by eliminating the few rigid unknowns with a Schur complement: one solve with K_uu
+(solver/linear.py: factored every iteration, or its bulk part once with a low-rank contact
+update) serves the residual and the n_r columns of K_ur at once, then the small dense system
 S dr = -R_r + K_ru y, S = K_rr - K_ru X, gives dr. The Jacobian is consistent: K_uu
 and K_ur come from UFL derivatives of the residual, the rigid rows from the contact
 vector C (N) tested with the rigid-body modes W(u, r) of the current configuration:
@@ -27,10 +28,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.physics.rotation import cross_with_axis, rigid_modes
+from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
 ROOT_EVALUATIONS = 6
 """Residual assemblies the line search spends at most on the root of the slope g(alpha)."""
-DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
 
 class NewtonFailure(RuntimeError):
@@ -47,27 +48,16 @@ class SchurNewton:
     def __init__(self, problem, prefix: str = "femcontact_"):
         self.problem = p = problem
         forms, n_r = p.forms, len(p.rigid.names)
-        self.K = petsc.create_matrix(forms.jacobian)
         self.Kc = petsc.create_matrix(forms.jacobian_contact)
         self.b_bulk = petsc.create_vector(forms.residual_bulk)
         self.b_contact = petsc.create_vector(forms.residual_contact)
         self.kur = [petsc.create_vector(form) for form in forms.contact_dr]
-        self.work = [p.u.vector.copy() for _ in range(2 * n_r + 3)]
-
-        self.ksp = PETSc.KSP().create(p.mesh.comm)
-        self.ksp.setOptionsPrefix(prefix)
-        options = PETSc.Options()
-        for key, value in {**DEFAULT_PETSC_OPTIONS, **p.scene["solver"]["petsc_options"]}.items():
-            options[prefix + key] = value
-        self.ksp.setFromOptions()
-        self.ksp.setOperators(self.K)
-        if options.getString(prefix + "pc_type", "") == "gamg":
-            self.K.setNearNullSpace(self._near_nullspace())
-
+        self.work = [p.u.vector.copy() for _ in range(2 * n_r)]
         self.n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
         self.extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
         self.bc_dofs = p.support_dof_set
+        self.linear = linear_solver(p, prefix, self._near_nullspace)
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
         self._assembled = None  # (load, u, r, residual) of the last residual assembly
 
@@ -184,19 +174,20 @@ class SchurNewton:
         """Newton direction (du Vec, dr array) from the Schur complement."""
         p = self.problem
         n_r, free = len(p.rigid.names), p.rigid.free
-        self.K.zeroEntries()
-        petsc.assemble_matrix(self.K, p.forms.jacobian, bcs=p.bcs)
         self.Kc.zeroEntries()
         petsc.assemble_matrix(self.Kc, p.forms.jacobian_contact)
         for b, form in zip(self.kur, p.forms.contact_dr):
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
-        p.add_contact_jacobian([self.K, self.Kc], self.kur, self.bc_dofs)
-        self.K.assemble()
+        p.add_contact_jacobian([self.Kc] + self.linear.begin(), self.kur, self.bc_dofs)
         self.Kc.assemble()
         for b in self.kur:
             b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        try:
+            self.linear.factor(self.Kc)
+        except LinearSolveFailed as error:
+            raise NewtonFailure(str(error), []) from None
 
         contact = self.b_contact.array_r.reshape(-1, p.dim)
         modes = self._modes()
@@ -221,16 +212,15 @@ class SchurNewton:
             K_rr[j, : p.dim] += cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
         K_rr += -load.generalized_force_jacobian(p.rigid.values) + p.rigid_stiffness(load) + self.stabilization
 
-        y, du = self.work[2 * n_r], self.work[2 * n_r + 1]
-        self._linear_solve(R_u, y)
-        X = []
+        columns = []
         for k in range(n_r):
-            rhs = self.work[2 * n_r + 2]
-            self.kur[k].copy(rhs)
+            rhs = self.kur[k].copy()
             petsc.set_bc(rhs, p.bcs, scale=0.0)
-            column = rhs.duplicate()
-            self._linear_solve(rhs, column)
-            X.append(column)
+            columns.append(rhs)
+        try:
+            y, *X = self.linear.solve([R_u] + columns)
+        except LinearSolveFailed as error:
+            raise NewtonFailure(str(error), []) from None
         S = K_rr - np.array([[K_ru[i].dot(X[k]) for k in range(n_r)] for i in range(n_r)])
         rhs_r = -R_r + np.array([K_ru[i].dot(y) for i in range(n_r)])
         dr = np.zeros(n_r)
@@ -239,7 +229,7 @@ class SchurNewton:
             dr[free] = self._rigid_step(S_ff, rhs_r[free])
             if dr[free] @ S_ff @ dr[free] <= 0:  # no stiffness along the step: see _rigid_step
                 dr[free] = self._rigid_step(S_ff, rhs_r[free], shifted=True)
-        y.copy(du)
+        du = y
         du.scale(-1.0)
         for k in range(n_r):
             du.axpy(-dr[k], X[k])
@@ -273,12 +263,6 @@ class SchurNewton:
         size = p.shape["scale"]
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)).max()
         return bool(length >= (1 - 1e-9) * p.model.h_contact)
-
-    def _linear_solve(self, rhs, out) -> None:
-        self.ksp.solve(rhs, out)
-        if self.ksp.getConvergedReason() < 0:
-            raise NewtonFailure(f"linear solver failed (PETSc reason {self.ksp.getConvergedReason()})", [])
-        out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     def line_search(self, load, du, dr, residual):
         """Step along (du, dr); returns the residual (R_u, R_r, scale) where it stops.

@@ -80,11 +80,18 @@ class Problem:
 
     # -- forms ---------------------------------------------------------------------------
     def _compile(self) -> SimpleNamespace:
+        """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
+        stiffness where it does not depend on the state, only on `bulk_constants` (the solver
+        then factors it once: solver/linear.py)."""
         du = ufl.TrialFunction(self.V)
         contact = self.contact_integrand * self.ds_contact
         d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
+        bulk_jacobian = ufl.algorithms.expand_derivatives(ufl.derivative(self.bulk, self.u, du))
+        state_free = not bulk_jacobian.coefficients()
+        self.bulk_constants = bulk_jacobian.constants() if state_free else ()
         return SimpleNamespace(
             residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
+            jacobian_bulk=fem.form(bulk_jacobian) if state_free and self.scene["solver"]["contact_update"] else None,
             jacobian=fem.form(ufl.derivative(self.bulk + contact, self.u, du)),
             jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
             contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])

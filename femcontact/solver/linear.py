@@ -1,0 +1,229 @@
+"""The linear solves of a Newton iteration: K X = B for the residual and the rigid columns at once.
+
+K = K_bulk + K_contact. Two strategies, both direct (MUMPS through PETSc, solving all
+right-hand sides in one call to the factor):
+
+- `Factorization`: K is assembled and factored every iteration.
+- `ContactUpdate`: where the bulk stiffness does not depend on the state (small-strain
+  elasticity; a mass term at a fixed time step), K_bulk is factored once. The contact part is
+  nonzero only on the dofs S of the active contact's cells (a few hundred in 3-D), K_contact =
+  P^T C P with C = K_contact[S, S], and the Woodbury identity gives
+
+      K^-1 B = Y - Z (I + C Z_SS)^-1 C Y_S,     Y = K_bulk^-1 B,  Z = K_bulk^-1 P^T,
+
+  with Z's columns cached by dof, so a dof's column is solved once while the contact zone
+  stays put. A refactorisation follows a change in the bulk stiffness's constants (dt);
+  a contact set larger than `max_rank` falls back to `Factorization` for that iteration.
+
+Supported dofs are identity rows of K_bulk and are left out of S (their right-hand sides
+are zero).
+"""
+import numpy as np
+from dolfinx.fem import petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+COLUMN_BYTES = 2e8
+"""Largest memory (bytes per rank) the cached columns of K_bulk^-1 may take."""
+
+
+class LinearSolveFailed(RuntimeError):
+    """The factorisation or a solve failed (PETSc's reason in the message)."""
+
+
+def _ksp(matrix, comm, prefix: str, petsc_options: dict):
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    options = PETSc.Options()
+    for key, value in {**DEFAULT_PETSC_OPTIONS, **petsc_options}.items():
+        options[prefix + key] = value
+    ksp.setFromOptions()
+    ksp.setOperators(matrix)
+    return ksp
+
+
+class Factorization:
+    """K assembled and factored every iteration (any PETSc solver the options name)."""
+
+    def __init__(self, problem, prefix: str, near_nullspace=None):
+        self.problem = problem
+        self.K = petsc.create_matrix(problem.forms.jacobian)
+        self.ksp = _ksp(self.K, problem.mesh.comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.direct = self.ksp.getType() == "preonly" and self.ksp.getPC().getType() == "lu"
+        if near_nullspace is not None and self.ksp.getPC().getType() == "gamg":
+            self.K.setNearNullSpace(near_nullspace())
+
+    def begin(self) -> list:
+        """Assemble the integrals of K; returns the matrices the effects' own entries go to."""
+        self.K.zeroEntries()
+        petsc.assemble_matrix(self.K, self.problem.forms.jacobian, bcs=self.problem.bcs)
+        return [self.K]
+
+    def factor(self, Kc) -> None:
+        self.K.assemble()
+        self.ksp.setOperators(self.K)  # marks the operator new: setUp refactors
+        _set_up(self.ksp)
+
+    def solve(self, rhs: list) -> list:
+        """K^-1 applied to each Vec of `rhs`; new Vecs, ghosts updated."""
+        if not self.direct:
+            return [self._solve_one(b) for b in rhs]
+        return _from_columns(_mat_solve(self.ksp, [b.array_r for b in rhs], self.K), rhs[0])
+
+    def _solve_one(self, b):
+        x = b.duplicate()
+        self.ksp.solve(b, x)
+        if self.ksp.getConvergedReason() < 0:
+            raise LinearSolveFailed(f"linear solver failed (PETSc reason {self.ksp.getConvergedReason()})")
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return x
+
+
+class ContactUpdate:
+    """K_bulk factored once, the contact's low-rank part added by the Woodbury identity."""
+
+    def __init__(self, problem, prefix: str, full: Factorization):
+        self.problem, comm = problem, problem.mesh.comm
+        self.full = full  # for a contact set too large for the update
+        self.Kb = petsc.create_matrix(problem.forms.jacobian_bulk)
+        self.ksp = _ksp(self.Kb, comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.rows = self.Kb.getOwnershipRange()
+        bc_local = np.array(sorted(problem.support_dof_set), dtype=np.int64)
+        self.bc_global = np.unique(np.concatenate(comm.allgather(self._global(bc_local))))
+        n_owned = self.rows[1] - self.rows[0]
+        self.max_rank = int(min(2000, COLUMN_BYTES / (8 * max(comm.allreduce(n_owned, op=MPI.MAX), 1))))
+        self.key = None  # the bulk stiffness's constants when it was factored
+        self.columns: dict[int, np.ndarray] = {}  # dof -> owned rows of K_bulk^-1 e_dof
+        self.use_full = False
+        self.factorizations = 0
+
+    def _global(self, local_dofs: np.ndarray) -> np.ndarray:
+        """Global (unrolled) indices of local (unrolled, owned or ghost) dofs."""
+        index_map, bs = self.problem.V.dofmap.index_map, self.problem.V.dofmap.index_map_bs
+        blocks = index_map.local_to_global((local_dofs // bs).astype(np.int32))
+        return np.asarray(blocks, dtype=np.int64) * bs + local_dofs % bs
+
+    def begin(self) -> list:
+        return []
+
+    def factor(self, Kc) -> None:
+        """Refactor K_bulk if its constants changed; set up the update for this Kc."""
+        comm = self.problem.mesh.comm
+        key = tuple(float(c.value) for c in self.problem.bulk_constants)
+        if key != self.key:
+            self.Kb.zeroEntries()
+            petsc.assemble_matrix(self.Kb, self.problem.forms.jacobian_bulk, bcs=self.problem.bcs)
+            self.Kb.assemble()
+            _set_up(self.ksp)
+            self.key, self.columns = key, {}
+            self.factorizations += 1
+        r0, r1 = self.rows
+        indptr, indices, values = Kc.getValuesCSR()
+        nonzero = values != 0.0
+        rows = r0 + np.repeat(np.arange(r1 - r0), np.diff(indptr))[nonzero]
+        cols = indices[nonzero].astype(np.int64)
+        local = np.union1d(rows, cols)
+        S = np.unique(np.concatenate(comm.allgather(local)))
+        S = S[~np.isin(S, self.bc_global)]
+        self.use_full = len(S) > self.max_rank
+        if self.use_full:
+            self.full.begin()
+            self.problem.add_contact_jacobian([self.full.K], [], self.problem.support_dof_set)
+            self.full.factor(Kc)
+            return
+        self.S = S
+        keep = np.isin(rows, S) & np.isin(cols, S)
+        C = np.zeros((len(S), len(S)))
+        np.add.at(C, (np.searchsorted(S, rows[keep]), np.searchsorted(S, cols[keep])), values[nonzero][keep])
+        comm.Allreduce(MPI.IN_PLACE, C, op=MPI.SUM)
+        self.C = C
+        new = [int(s) for s in S if int(s) not in self.columns]
+        if len(self.columns) + len(new) > self.max_rank:  # forget the columns of dofs left behind
+            self.columns = {s: self.columns[s] for s in map(int, S) if s in self.columns}
+        if new:
+            unit = np.zeros((r1 - r0, len(new)))
+            for k, s in enumerate(new):
+                if r0 <= s < r1:
+                    unit[s - r0, k] = 1.0
+            solved = _mat_solve(self.ksp, [unit[:, k] for k in range(len(new))], self.Kb)
+            self.columns.update({s: solved[:, k].copy() for k, s in enumerate(new)})
+        self.Z = np.column_stack([self.columns[int(s)] for s in S]) if len(S) else np.zeros((r1 - r0, 0))
+        self.owned = (S >= r0) & (S < r1)
+        self.owned_rows = S[self.owned] - r0
+        self.M = np.eye(len(S)) + self.C @ self._rows_of_S(self.Z)
+
+    def _rows_of_S(self, X: np.ndarray) -> np.ndarray:
+        """The rows at the dofs S of a row-distributed array (every rank gets all)."""
+        rows = np.zeros((len(self.S), X.shape[1]))
+        rows[self.owned] = X[self.owned_rows]
+        self.problem.mesh.comm.Allreduce(MPI.IN_PLACE, rows, op=MPI.SUM)
+        return rows
+
+    def solve(self, rhs: list) -> list:
+        if self.use_full:
+            return self.full.solve(rhs)
+        B = np.column_stack([b.array_r for b in rhs])
+        outside = np.ones(len(B), dtype=bool)
+        outside[self.owned_rows] = False
+        # a right-hand side on the dofs S only (the rigid columns: contact rows) needs no solve
+        on_S = self.problem.mesh.comm.allreduce(np.count_nonzero(B[outside], axis=0), op=MPI.SUM) == 0
+        Y = np.empty_like(B)
+        Y[:, on_S] = self.Z @ self._rows_of_S(B[:, on_S])
+        if not on_S.all():
+            Y[:, ~on_S] = _mat_solve(self.ksp, list(B[:, ~on_S].T), self.Kb)
+        if len(self.S):
+            Y = Y - self.Z @ np.linalg.solve(self.M, self.C @ self._rows_of_S(Y))
+        return _from_columns(Y, rhs[0])
+
+
+def _set_up(ksp) -> None:
+    """Factor (a failed factorisation is a failed linear solve)."""
+    try:
+        ksp.setUp()
+    except PETSc.Error as error:
+        raise LinearSolveFailed(f"factorisation failed (PETSc error {error.ierr})") from None
+
+
+def _mat_solve(ksp, columns: list, matrix) -> np.ndarray:
+    """The factored operator of `ksp` applied to the owned parts `columns` (one call, MUMPS
+    solving all at once); returns the owned rows of the solutions, one column each."""
+    n_local, n_global = matrix.getLocalSize()[0], matrix.getSize()[0]
+    comm = matrix.getComm()
+    B = PETSc.Mat().createDense([(n_local, n_global), (None, len(columns))], comm=comm)
+    B.setUp()
+    B.getDenseArray()[:] = np.column_stack(columns)
+    B.assemble()
+    X = PETSc.Mat().createDense([(n_local, n_global), (None, len(columns))], comm=comm)
+    X.setUp()
+    X.assemble()
+    try:
+        ksp.getPC().getFactorMatrix().matSolve(B, X)
+    except PETSc.Error as error:
+        raise LinearSolveFailed(f"linear solve failed (PETSc error {error.ierr})") from None
+    result = X.getDenseArray().copy()
+    if not np.all(np.isfinite(result)):
+        raise LinearSolveFailed("linear solve gave a non-finite result")
+    B.destroy()
+    X.destroy()
+    return result
+
+
+def _from_columns(X: np.ndarray, like) -> list:
+    """Ghosted Vecs shaped like `like` holding the columns of X (owned rows)."""
+    out = []
+    for k in range(X.shape[1]):
+        vector = like.duplicate()
+        vector.array_w[:] = X[:, k]
+        vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        out.append(vector)
+    return out
+
+
+def linear_solver(problem, prefix: str, near_nullspace=None):
+    """`ContactUpdate` where it applies (state-independent bulk stiffness, a direct solver,
+    `solver.contact_update` on), else `Factorization`."""
+    full = Factorization(problem, prefix, near_nullspace)
+    if problem.forms.jacobian_bulk is None or not full.direct or not problem.scene["solver"]["contact_update"]:
+        return full
+    return ContactUpdate(problem, prefix, full)
