@@ -12,14 +12,18 @@ one point of the force history, in the analytic tier's conventions (femcontact.r
 - phase: from the contact zones A (x < 0) and B (x > 0): none; one zone touched by the peg's tip
   corner (`corner_contacts`) still above the chamfer's lower edge, or less than half a contact
   element below it (the corner rounding the hole's edge node): 'chamfer'; one zone otherwise:
-  'one_point';
+  'one_point'; a tip rim rounded with radius rho (`peg.corner_radius`): from the rounding's
+  centre P on the touching side and the chamfer's lower edge E there, 'chamfer' while P projects
+  onto the chamfer line above E (the rounding on the cone), 'edge' while P lies above E both
+  vertically and along the peg axis (the rounding rolls over E), 'one_point' after (the rounding
+  on the wall or E on the straight side; as in references/rounded_rim.py);
   both zones: 'two_point', with l (mm) from the tip to the edge contact (the higher zone force
   centre) along the peg. A zone is in contact when its force exceeds `CONTACT_FLOOR` of
   the largest zone force of the run.
 
 Metrics: `two_point_onset` (the new zone's force extrapolated linearly to zero over the first
 two two-point rows, kept inside the increment where it appeared), `peak_force`/`peak_depth`
-(largest Fz at s >= 0 after the chamfer), `chamfer_peak_force`, `jammed` (the insertion force runs away:
+(largest Fz at s >= 0 after the chamfer and edge phases), `chamfer_peak_force` (over both), `jammed` (the insertion force runs away:
 dFz/ds over `JAM_WINDOW` of gripper travel exceeds `JAM_SLOPE` K_x, or the scene's stop
 condition ended the run;
 `jam_depth` the first such depth). Measured on studies/insertion.toml: sliding insertions rise
@@ -54,7 +58,8 @@ def force_history(scene: dict, history: list[dict]) -> dict:
     in the x-z plane, where the lateral and angular errors lie)."""
     peg, hole, support = scene["peg"], scene["hole"], scene["support"]
     h_c = chamfer_height(hole["chamfer_width"], hole["chamfer_angle"])
-    r, lg = peg["width"] / 2, support["compliance_centre"]
+    r, lg, rho = peg["width"] / 2, support["compliance_centre"], peg["corner_radius"]
+    a = math.radians(hole["chamfer_angle"])
     h_contact = scene["mesh"]["contact_size"] or 0.0
     largest = max([max(row["contact_A_force"], row["contact_B_force"]) for row in history] + [0.0])
     floor = max(CONTACT_FLOOR * largest, 1e-12)
@@ -70,6 +75,14 @@ def force_history(scene: dict, history: list[dict]) -> dict:
             phase = "none"
         elif len(touching) == 2:
             phase = "two_point"
+        elif rho > 0:  # where the rounding's centre P on the touching side lies from the edge E
+            side = -1.0 if touching[0] == "A" else 1.0
+            axis, normal = (-math.sin(theta), math.cos(theta)), (math.cos(theta), math.sin(theta))
+            P = [row[f"tip_{c}"] + side * (r - rho) * normal[k] + rho * axis[k] for k, c in enumerate(("x", ax))]
+            PE = (P[0] - side * hole["width"] / 2, P[1] + h_c)
+            on_cone = PE[0] * side * math.sin(a) + PE[1] * math.cos(a) > 0
+            on_rounding = PE[1] > 0 and PE[0] * axis[0] + PE[1] * axis[1] > 0  # not yet on the wall or side
+            phase = "chamfer" if on_cone else "edge" if on_rounding else "one_point"
         else:
             side = -1.0 if touching[0] == "A" else 1.0
             corner_y = row[f"tip_{ax}"] + side * r * math.sin(theta)
@@ -140,9 +153,9 @@ def inside_cones(scene: dict, row: dict, mu: float) -> bool:
 
 
 def in_hole_peak(curve: dict) -> tuple[float | None, float | None]:
-    """Largest Fz (N) at s >= 0 outside the chamfer phase and its depth s (mm), or (None, None)."""
+    """Largest Fz (N) at s >= 0 outside the chamfer and edge phases and its depth s (mm), or (None, None)."""
     depth, Fz = np.array(curve["depth"]), np.array(curve["Fz"])
-    inside = (depth >= 0) & np.array([ph != "chamfer" for ph in curve["phase"]])
+    inside = (depth >= 0) & np.array([ph not in ("chamfer", "edge") for ph in curve["phase"]])
     if not inside.any():
         return None, None
     i = int(np.argmax(np.where(inside, Fz, -np.inf)))
@@ -156,7 +169,7 @@ def insertion_metrics(simulation) -> dict:
     depth = np.array(curve["depth"])
     out = {"two_point_onset": two_point_onset(curve)}
     out["peak_force"], out["peak_depth"] = in_hole_peak(curve)
-    chamfer = [f for f, ph in zip(curve["Fz"], curve["phase"]) if ph == "chamfer"]
+    chamfer = [f for f, ph in zip(curve["Fz"], curve["phase"]) if ph in ("chamfer", "edge")]
     out["chamfer_peak_force"] = float(max(chamfer)) if chamfer else None
     out["jam_depth"] = jam_depth(scene, curve)
     out["stopped"] = bool(simulation.stopped)
@@ -164,7 +177,7 @@ def insertion_metrics(simulation) -> dict:
     mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
     out["wedged"] = any(ph == "two_point" and inside_cones(scene, row, mu) for row, ph in zip(history, curve["phase"]))
     out["final_depth"] = float(depth[-1])
-    for phase in ("chamfer", "one_point", "two_point"):
+    for phase in PHASES:
         out[f"{phase}_increments"] = sum(ph == phase for ph in curve["phase"])
     out["lambda_onset"] = (out["two_point_onset"] / (mu * scene["peg"]["width"])
                            if out["two_point_onset"] is not None and mu > 0 else None)
@@ -174,7 +187,7 @@ def insertion_metrics(simulation) -> dict:
 
 
 # ---- the analytic tier on the same scene (femcontact.references.whitney) ----------------------
-PHASES = ("chamfer", "one_point", "two_point")
+PHASES = ("chamfer", "edge", "one_point", "two_point")
 
 
 def analytic_problem(scene: dict):
@@ -185,8 +198,9 @@ def analytic_problem(scene: dict):
     A tip rim rounded with radius rho (`peg.corner_radius`) is the analytic tier's sharp peg of the
     same width with its tip rho higher (at the rounding's centres): the rounding touches a wall
     where that sharp corner does, to rho (1 - cos theta), and the edge touches the same straight
-    side; so L_g - rho, eps0 - rho sin theta0, and depths rho cos theta0 deeper. On the chamfer the
-    rounding touches elsewhere: the chamfer phase is not mapped exactly."""
+    side; so L_g - rho, eps0 - rho sin theta0, and depths rho cos theta0 deeper. On the chamfer
+    the rounding touches elsewhere: `analytic_curve` takes the crossing from
+    femcontact.references.rounded_rim instead."""
     from femcontact.effects.compliant_support import stiffness_matrix
     from femcontact.references import whitney
 
@@ -206,9 +220,13 @@ def analytic_problem(scene: dict):
 
 def analytic_curve(scene: dict, depth_max: float, points: int = 201) -> dict | None:
     """The analytic force history to depth_max (mm), or None (see analytic_problem); depths are
-    those of the scene's tip."""
+    those of the scene's tip. A rounded rim: the crossing (free, 'chamfer', 'edge') from
+    rounded_rim.crossing on the real peg, then the sharp tier's rows after its chamfer phase;
+    the scalars from the sharp tier, the chamfer peak (crossing peak) from the crossing."""
+    from dataclasses import replace
+
     from femcontact.errors import InputError
-    from femcontact.references import whitney
+    from femcontact.references import rounded_rim, whitney
 
     described = analytic_problem(scene)
     if described is None:
@@ -221,14 +239,28 @@ def analytic_curve(scene: dict, depth_max: float, points: int = 201) -> dict | N
     curve["depth"] = [s + offset for s in curve["depth"]]
     for key in ("two_point_onset", "peak_depth", "jam_depth"):
         curve[key] = None if curve[key] is None else curve[key] + offset
-    return curve
+    rho = scene["peg"]["corner_radius"]
+    if rho <= 0:
+        return curve
+    real = replace(problem, lg=problem.lg + rho, lateral_error=scene["peg"]["offset"])
+    way_in = rounded_rim.crossing(real, rho, np.linspace(curve["depth"][0], depth_max, points))
+    after = [i for i, s in enumerate(curve["depth"]) if way_in["handover"] is not None and s >= way_in["handover"]]
+    while after and curve["phase"][after[0]] == "chamfer":  # the sharp corner still above E: not yet
+        after.pop(0)
+    keys = ("depth", "Fz", "Fx", "M", "theta", "phase")
+    out = {key: way_in[key] + [curve[key][i] for i in after] for key in keys}
+    out.update({key: curve[key] for key in ("two_point_onset", "peak_force", "peak_depth", "wedging_possible",
+                                             "jams", "jam_depth")})
+    crossing = [f for f, ph in zip(way_in["Fz"], way_in["phase"]) if ph in ("chamfer", "edge")]
+    out["chamfer_peak_force"] = max(crossing) if crossing else None
+    return out
 
 
 def compare(curve: dict, analytic: dict) -> dict:
     """Per phase: the largest |FE - analytic| of Fz and Fx over the FE rows of that phase lying within
     the analytic phase's depth range (interpolated inside it), relative to the largest analytic |Fz|
-    (|Fx|) of that phase; and the fraction of rows in contact whose phase the analytic state at the
-    nearest depth shares."""
+    (|Fx|) of that phase; and the fraction of rows in a phase of PHASES whose phase the analytic
+    state at the nearest depth shares."""
     a_depth = np.array(analytic["depth"])
     out, agree, counted = {}, 0, 0
     nearest = [int(np.argmin(np.abs(a_depth - s))) for s in curve["depth"]]
@@ -245,7 +277,7 @@ def compare(curve: dict, analytic: dict) -> dict:
             errors = [abs(curve[quantity][i] - np.interp(curve["depth"][i], depths, values)) for i in rows]
             out[f"{quantity.lower()}_error_{phase}"] = float(max(errors) / scale) if errors and scale > 0 else None
     for i, ph in enumerate(curve["phase"]):
-        if ph != "none" and a_depth[0] <= curve["depth"][i] <= a_depth[-1]:
+        if ph in PHASES and a_depth[0] <= curve["depth"][i] <= a_depth[-1]:
             counted += 1
             agree += analytic["phase"][nearest[i]] == ph
     out["phase_agreement"] = agree / counted if counted else None

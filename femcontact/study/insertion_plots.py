@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-PHASE_COLOURS = {"chamfer": "tab:orange", "one_point": "tab:green", "two_point": "tab:red"}
+PHASE_COLOURS = {"chamfer": "tab:orange", "edge": "tab:purple", "one_point": "tab:green", "two_point": "tab:red"}
 
 
 def _float(value):
