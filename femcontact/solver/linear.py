@@ -96,7 +96,6 @@ class ContactUpdate:
         self.key = None  # the bulk stiffness's constants when it was factored
         self.columns: dict[int, np.ndarray] = {}  # dof -> owned rows of K_bulk^-1 e_dof
         self.use_full = False
-        self.factorizations = 0
 
     def _global(self, local_dofs: np.ndarray) -> np.ndarray:
         """Global (unrolled) indices of local (unrolled, owned or ghost) dofs."""
@@ -117,7 +116,6 @@ class ContactUpdate:
             self.Kb.assemble()
             _set_up(self.ksp)
             self.key, self.columns = key, {}
-            self.factorizations += 1
         r0, r1 = self.rows
         indptr, indices, values = Kc.getValuesCSR()
         nonzero = values != 0.0
@@ -202,10 +200,10 @@ def _mat_solve(ksp, columns: list, matrix) -> np.ndarray:
     except PETSc.Error as error:
         raise LinearSolveFailed(f"linear solve failed (PETSc error {error.ierr})") from None
     result = X.getDenseArray().copy()
-    if not np.all(np.isfinite(result)):
-        raise LinearSolveFailed("linear solve gave a non-finite result")
     B.destroy()
     X.destroy()
+    if not comm.tompi4py().allreduce(bool(np.all(np.isfinite(result))), op=MPI.LAND):  # every rank raises alike
+        raise LinearSolveFailed("linear solve gave a non-finite result")
     return result
 
 
@@ -221,9 +219,9 @@ def _from_columns(X: np.ndarray, like) -> list:
 
 
 def linear_solver(problem, prefix: str, near_nullspace=None):
-    """`ContactUpdate` where it applies (state-independent bulk stiffness, a direct solver,
-    `solver.contact_update` on), else `Factorization`."""
+    """`ContactUpdate` where it applies (a bulk stiffness form, compiled only where it is
+    state-independent and `solver.contact_update` is on; a direct solver), else `Factorization`."""
     full = Factorization(problem, prefix, near_nullspace)
-    if problem.forms.jacobian_bulk is None or not full.direct or not problem.scene["solver"]["contact_update"]:
+    if problem.forms.jacobian_bulk is None or not full.direct:
         return full
     return ContactUpdate(problem, prefix, full)
