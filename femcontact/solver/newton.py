@@ -18,7 +18,8 @@ where R_effects are the effects' own rigid-body terms (inertia M a(r), weight). 
 solver calls only the problem's forms and hooks; it names no effect.
 
 A line search (see `SchurNewton.line_search`) damps the semismooth Newton where
-stick/slip or contact sets change. A failed linear solve, a NaN or too many
+stick/slip or contact sets change; before it, a rejected full step is retried along a curved
+path that follows the residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN or too many
 iterations raise `NewtonFailure`, which the stepper answers by cutting the increment.
 """
 import numpy as np
@@ -30,7 +31,7 @@ from petsc4py import PETSc
 from femcontact.physics.rotation import cross_with_axis, rigid_modes
 from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
-ROOT_EVALUATIONS = 6
+ROOT_EVALUATIONS = 8
 """Residual assemblies the line search spends at most on the root of the slope g(alpha)."""
 CURVE_PROBE = 1.0 / 64
 """Fraction of the Newton step at which `curved_step` measures the residual's curvature."""
@@ -295,14 +296,20 @@ class SchurNewton:
         """Step along (du, dr); returns the residual (R_u, R_r, scale) where it stops.
 
         The full step is taken when it lowers |R| (one assembly, reused by the next
-        iteration). When it does not but overshoots along the direction, that is the
-        directional derivative g(alpha) = R(alpha) . (du, dr) (N*mm, the slope of the
-        energy for a potential problem) turns from negative to positive, the step stops
+        iteration). When it does not, the curved step (`curved_step`: two assemblies and one
+        solve with the factor at hand) is tried. When that fails too but the step overshoots
+        along the direction, that is the directional derivative g(alpha) = R(alpha) . (du, dr)
+        (N*mm, the slope of the energy for a potential problem) turns from negative to
+        positive, the step stops
         near the root of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies): a
         semismooth Newton step linearised on too few contact nodes (a cold contact set, a
         growing contact zone) drives the body past equilibrium into a far too large contact
         set, which the following iterations could only shed a few nodes at a time; stopping
-        at the root approaches the contact set from inside. Failing both, the longest of
+        at the root approaches the contact set from inside. Where the step reaches a contact
+        that is open at its start, g is a hinge: flat (g0 (1 - alpha)) up to the contact, then
+        steep; the quadratic's first estimate then lands far below the contact (measured: 0.1 %
+        of the step, where the contact closed at 2 %, every iteration again), so a bracket
+        spanning more than a factor 4 is halved geometrically. Failing both, the longest of
         1/2, 1/4, ... 1/4096 that lowers |R| (else the best found)."""
         p = self.problem
         norm = self.norm(*residual[:2])
@@ -324,7 +331,9 @@ class SchurNewton:
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
                 c = (g - g0 + g0 * a) / (a * a)
                 alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
-                if not a_lo < alpha < a_hi:
+                if a_lo > 0 and a_hi > 4 * a_lo:  # a bracket over decades: a hinge (see above)
+                    alpha = np.sqrt(a_lo * a_hi)
+                elif not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
                 if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
                     alpha = a_lo + 0.125 * (a_hi - a_lo)
