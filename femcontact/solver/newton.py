@@ -32,6 +32,9 @@ from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
 ROOT_EVALUATIONS = 6
 """Residual assemblies the line search spends at most on the root of the slope g(alpha)."""
+FLAT_SHRINK = 1 / 64
+"""Where the slope g kept its value as alpha fell (it jumps near a_lo), the next alpha's
+fraction of the bracket."""
 
 
 class NewtonFailure(RuntimeError):
@@ -297,7 +300,7 @@ class SchurNewton:
                 if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
                 if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
-                    alpha = a_lo + 0.125 * (a_hi - a_lo)
+                    alpha = a_lo + FLAT_SHRINK * (a_hi - a_lo)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
                 previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
