@@ -293,10 +293,16 @@ class SchurNewton:
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
             a_lo, a_hi, (a, g), flat = 0.0, 1.0, (1.0, g1), False
+            g_lo, g_hi = g0, g1
             for _ in range(ROOT_EVALUATIONS):
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
                 c = (g - g0 + g0 * a) / (a * a)
-                alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
+                if c > 0:
+                    alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c)
+                else:  # g is still g0's line at a_lo: the same quadratic from (a_lo, g_lo) to (a_hi, g_hi)
+                    span = a_hi - a_lo
+                    c = (g_hi - g_lo + g0 * span) / (span * span)
+                    alpha = a_lo + (g0 + np.sqrt(g0 * g0 - 4 * c * g_lo)) / (2 * c) if c > 0 else -1.0
                 if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
                 if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
@@ -310,9 +316,9 @@ class SchurNewton:
                 if abs(g) <= 0.5 * abs(g0):
                     return trial
                 if g < 0:
-                    a_lo = alpha
+                    a_lo, g_lo = alpha, g
                 else:
-                    a_hi = alpha
+                    a_hi, g_hi = alpha, g
             if a_lo > 0:
                 self._update(u0, r0, du, dr, a_lo)
                 return self.assemble_residual(load)
