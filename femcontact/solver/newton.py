@@ -274,7 +274,9 @@ class SchurNewton:
         iteration). When it does not but overshoots along the direction, that is the
         directional derivative g(alpha) = R(alpha) . (du, dr) (N*mm, the slope of the
         energy for a potential problem) turns from negative to positive, the step stops
-        near the root of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies): a
+        near the root of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies; each trial
+        the root of a quadratic with Newton's slope -g(0), from 0 or, where g is still on
+        its line at a_lo, from a_lo: the contact's kink lies beyond it): a
         semismooth Newton step linearised on too few contact nodes (a cold contact set, a
         growing contact zone) drives the body past equilibrium into a far too large contact
         set, which the following iterations could only shed a few nodes at a time; stopping
