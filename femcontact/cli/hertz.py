@@ -17,6 +17,7 @@ import subprocess
 import sys
 import time
 
+from femcontact.cli import start_mpi_for_meshing
 from femcontact.errors import InputError
 
 
@@ -77,8 +78,7 @@ def command(args) -> int:
     check(args)
     if args.ranks > 1 and not os.environ.get("FEMCONTACT_HERTZ_CHILD"):
         return relaunch(args)
-    from mpi4py import MPI
-
+    MPI = start_mpi_for_meshing()
     from femcontact.scenarios import hertz
     from femcontact.solver.stepping import Simulation
 

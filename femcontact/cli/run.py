@@ -18,6 +18,7 @@ import traceback
 from pathlib import Path
 
 from femcontact.config.scene import case_id, load_scene
+from femcontact.cli import start_mpi_for_meshing
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic
 
@@ -59,8 +60,7 @@ def check_restart(scene: dict, checkpoint: bool, restart, ranks: int) -> None:
 
 def command(args) -> int:
     scene = load_scene(args.scene, args.set)  # bad input is refused before MPI starts
-    from mpi4py import MPI
-
+    MPI = start_mpi_for_meshing()
     from femcontact.scenarios.case import run_case
 
     comm = MPI.COMM_WORLD

@@ -27,21 +27,17 @@ import argparse
 import importlib
 import json
 import math
-import os
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from femcontact.config.presets import PRESETS
+from femcontact.scenarios.processes import run_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 PRESET_NAMES = ("fast", "balanced", "accurate")
 OUT = Path("results/accuracy")
-LAUNCH_ENV = dict(os.environ)
-"""The environment before this process initialises MPI: an `mpirun` started with the variables
-Open MPI sets in an initialised process fails at once."""
 
 
 def hertz_case(label: str, knob: str, contact_size: float, degree: int = 1, gamma: float = 10.0,
@@ -130,14 +126,9 @@ def wedging_3d_rows() -> tuple[list[dict], list[str]]:
     rows = []
     for resolution in (0.3, 0.4, 0.55, 0.75):
         out = (OUT / f"wedging_3d_{resolution:g}").resolve()
-        start = time.perf_counter()
-        subprocess.run(["mpirun", "-n", "2", sys.executable, "-m", "femcontact", "run",
-                        str(ROOT / "scenes" / "wedging_3d.toml"), "--set", f"mesh.resolution={resolution}",
-                        "--out", str(out), "--quiet"], check=False, env=LAUNCH_ENV)
-        path = out / "result.json"
-        result = json.loads(path.read_text()) if path.exists() else {"status": "no result", "info": {}, "metrics": {}}
+        result, wall = run_scene(ROOT / "scenes" / "wedging_3d.toml", 2, out, {"mesh.resolution": resolution})
         rows.append({"knob": "mesh (P1, 2 ranks)", "setting": f"resolution {resolution:g}",
-                     "wall_time": time.perf_counter() - start, "status": result["status"],
+                     "wall_time": wall, "status": result["status"],
                      "dofs": result["info"].get("dofs"), "resultant": result["metrics"].get("residual_force_A")})
     reference = rows[-1]["resultant"]
     for row in rows:

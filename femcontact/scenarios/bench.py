@@ -30,6 +30,7 @@ from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_half_width
 from femcontact.scenarios import hertz, runner_overhead
+from femcontact.scenarios.processes import run_scene
 from femcontact.config.scene import resolve
 from femcontact.solver.stepping import Simulation
 
@@ -149,14 +150,7 @@ def wedging_3d(ranks: int = 2) -> dict:
     out = {}
     for update in (False, True):
         case = (OUT / f"wedging_3d_{ranks}_ranks_update_{update}").resolve()
-        start = time.perf_counter()
-        # env: Python's view of it (this process's MPI added variables a child mpirun fails on)
-        subprocess.run(["mpirun", "-n", str(ranks), sys.executable, "-m", "femcontact", "run", str(scene),
-                        "--set", "mesh.resolution=1", "--set", f"solver.contact_update={str(update).lower()}",
-                        "--out", str(case), "--quiet"], check=False, env=dict(os.environ))
-        wall = time.perf_counter() - start
-        path = case / "result.json"
-        result = json.loads(path.read_text()) if path.exists() else {"status": "no result", "info": {}, "metrics": {}}
+        result, wall = run_scene(scene, ranks, case, {"mesh.resolution": 1, "solver.contact_update": str(update).lower()})
         out[update] = {"status": result["status"], "wall_time": wall, "dofs": result["info"].get("dofs"),
                        "newton_iterations": result["info"].get("newton_iterations"),
                        "solve": result.get("timings", {}).get("solve"),

@@ -50,7 +50,7 @@ class Factorization:
         self.problem = problem
         self.K = petsc.create_matrix(problem.forms.jacobian)
         self.ksp = _ksp(self.K, problem.mesh.comm, prefix, problem.scene["solver"]["petsc_options"])
-        self.direct = self.ksp.getType() == "preonly" and self.ksp.getPC().getType() == "lu"
+        self.direct = _direct(self.ksp)
         if near_nullspace is not None and self.ksp.getPC().getType() == "gamg":
             self.K.setNearNullSpace(near_nullspace())
 
@@ -83,11 +83,13 @@ class Factorization:
 class ContactUpdate:
     """K_bulk factored once, the contact's low-rank part added by the Woodbury identity."""
 
-    def __init__(self, problem, prefix: str, full: Factorization):
+    def __init__(self, problem, prefix: str):
         self.problem, comm = problem, problem.mesh.comm
-        self.full = full  # for a contact set too large for the update
+        self.prefix = prefix
+        self.full = None  # a Factorization, made when a contact set is too large for the update
         self.Kb = petsc.create_matrix(problem.forms.jacobian_bulk)
         self.ksp = _ksp(self.Kb, comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.direct = _direct(self.ksp)
         self.rows = self.Kb.getOwnershipRange()
         bc_local = np.array(sorted(problem.support_dof_set), dtype=np.int64)
         self.bc_global = np.unique(np.concatenate(comm.allgather(self._global(bc_local))))
@@ -126,6 +128,8 @@ class ContactUpdate:
         S = S[~np.isin(S, self.bc_global)]
         self.use_full = len(S) > self.max_rank
         if self.use_full:
+            if self.full is None:
+                self.full = Factorization(self.problem, self.prefix)
             self.full.begin()
             self.problem.add_contact_jacobian([self.full.K], [], self.problem.support_dof_set)
             self.full.factor(Kc)
@@ -175,6 +179,10 @@ class ContactUpdate:
         return _from_columns(Y, rhs[0])
 
 
+def _direct(ksp) -> bool:
+    return ksp.getType() == "preonly" and ksp.getPC().getType() == "lu"
+
+
 def _set_up(ksp) -> None:
     """Factor (a failed factorisation is a failed linear solve)."""
     try:
@@ -221,7 +229,8 @@ def _from_columns(X: np.ndarray, like) -> list:
 def linear_solver(problem, prefix: str, near_nullspace=None):
     """`ContactUpdate` where it applies (a bulk stiffness form, compiled only where it is
     state-independent and `solver.contact_update` is on; a direct solver), else `Factorization`."""
-    full = Factorization(problem, prefix, near_nullspace)
-    if problem.forms.jacobian_bulk is None or not full.direct:
-        return full
-    return ContactUpdate(problem, prefix, full)
+    if problem.forms.jacobian_bulk is not None:
+        update = ContactUpdate(problem, prefix)
+        if update.direct:
+            return update
+    return Factorization(problem, prefix, near_nullspace)

@@ -19,8 +19,9 @@ solver calls only the problem's forms and hooks; it names no effect.
 
 A line search (see `SchurNewton.line_search`) damps the semismooth Newton where
 stick/slip or contact sets change; before it, a rejected full step is retried along a curved
-path that follows the residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN or too many
-iterations raise `NewtonFailure`, which the stepper answers by cutting the increment.
+path that follows the residual's curvature (`SchurNewton.curved_step`). A failed linear
+solve, a NaN or too many iterations raise `NewtonFailure`, which the stepper answers by
+cutting the increment.
 """
 import numpy as np
 from dolfinx import la
@@ -31,8 +32,11 @@ from petsc4py import PETSc
 from femcontact.physics.rotation import cross_with_axis, rigid_modes
 from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
-ROOT_EVALUATIONS = 8
+ROOT_EVALUATIONS = 6
 """Residual assemblies the line search spends at most on the root of the slope g(alpha)."""
+FLAT_SHRINK = 1 / 64
+"""Where the slope g kept its value as alpha fell (it jumps near a_lo), the next alpha's
+fraction of the bracket."""
 CURVE_PROBE = 1.0 / 64
 """Fraction of the Newton step at which `curved_step` measures the residual's curvature."""
 
@@ -300,16 +304,14 @@ class SchurNewton:
         solve with the factor at hand) is tried. When that fails too but the step overshoots
         along the direction, that is the directional derivative g(alpha) = R(alpha) . (du, dr)
         (N*mm, the slope of the energy for a potential problem) turns from negative to
-        positive, the step stops
-        near the root of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies): a
+        positive, the step stops near the root of g (|g| <= |g(0)| / 2, at most
+        ROOT_EVALUATIONS assemblies; each trial the root of a quadratic with Newton's slope
+        -g(0), from 0 or, where g is still on its line at a_lo, from a_lo: the contact's kink
+        lies beyond it): a
         semismooth Newton step linearised on too few contact nodes (a cold contact set, a
         growing contact zone) drives the body past equilibrium into a far too large contact
         set, which the following iterations could only shed a few nodes at a time; stopping
-        at the root approaches the contact set from inside. Where the step reaches a contact
-        that is open at its start, g is a hinge: flat (g0 (1 - alpha)) up to the contact, then
-        steep; the quadratic's first estimate then lands far below the contact (measured: 0.1 %
-        of the step, where the contact closed at 2 %, every iteration again), so a bracket
-        spanning more than a factor 4 is halved geometrically. Failing both, the longest of
+        at the root approaches the contact set from inside. Failing both, the longest of
         1/2, 1/4, ... 1/4096 that lowers |R| (else the best found)."""
         p = self.problem
         norm = self.norm(*residual[:2])
@@ -327,16 +329,20 @@ class SchurNewton:
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
             a_lo, a_hi, (a, g), flat = 0.0, 1.0, (1.0, g1), False
+            g_lo, g_hi = g0, g1
             for _ in range(ROOT_EVALUATIONS):
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
                 c = (g - g0 + g0 * a) / (a * a)
-                alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c) if c > 0 else 0.5 * (a_lo + a_hi)
-                if a_lo > 0 and a_hi > 4 * a_lo:  # a bracket over decades: a hinge (see above)
-                    alpha = np.sqrt(a_lo * a_hi)
-                elif not a_lo < alpha < a_hi:
+                if c > 0:
+                    alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c)
+                else:  # g is still g0's line at a_lo: the same quadratic from (a_lo, g_lo) to (a_hi, g_hi)
+                    span = a_hi - a_lo
+                    c = (g_hi - g_lo + g0 * span) / (span * span)
+                    alpha = a_lo + (g0 + np.sqrt(g0 * g0 - 4 * c * g_lo)) / (2 * c) if c > 0 else -1.0
+                if not a_lo < alpha < a_hi:
                     alpha = 0.5 * (a_lo + a_hi)
                 if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
-                    alpha = a_lo + 0.125 * (a_hi - a_lo)
+                    alpha = a_lo + FLAT_SHRINK * (a_hi - a_lo)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
                 previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
@@ -346,9 +352,9 @@ class SchurNewton:
                 if abs(g) <= 0.5 * abs(g0):
                     return trial
                 if g < 0:
-                    a_lo = alpha
+                    a_lo, g_lo = alpha, g
                 else:
-                    a_hi = alpha
+                    a_hi, g_hi = alpha, g
             if a_lo > 0:
                 self._update(u0, r0, du, dr, a_lo)
                 return self.assemble_residual(load)

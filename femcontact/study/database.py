@@ -77,6 +77,9 @@ class Database:
         try:
             self.connection = sqlite3.connect(self.path, isolation_level=None)  # explicit transactions
             self.connection.execute("PRAGMA journal_mode=WAL")
+            # commits without fsync (WAL stays consistent; a power cut may lose the last rows, which
+            # the next run rebuilds from the case directories)
+            self.connection.execute("PRAGMA synchronous=NORMAL")
         except sqlite3.Error as error:
             where = "" if os.access(self.path.parent, os.W_OK) else f"; {self.path.parent} is not writable"
             raise WriteError(f"{self.path}: cannot write the results database ({error}{where})") from None

@@ -18,14 +18,16 @@ DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_dept
                   "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
                   "degree_of_wedging", "degree_estimate", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",
                   "one_dof_first_slip_N", "one_dof_full_slide_N"]
-METHOD_COLUMNS = ["method", "pulse_hz", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
+METHOD_COLUMNS = ["method", "base_pull", "pulse_hz", "threshold_force_N", "impulse_at_threshold_Ns", "threshold_over_pullout", "bracket_N",
                   "dislodge_time_at_threshold_s", "least_impulse_Ns", "least_impulse_peak_N", "quasi_static_pullout_N",
                   "pulls", "loads"]
 LOADS = {"continuous": "constant vertical pull at the peg top",
          "pulse": "vertical triangle pulses",
          "shake": "lateral triangle pulses at the peg top, against the wedging moment",
          "twist": "moment triangle pulses, against the wedging moment; F = M / d (d = 50 mm)",
-         "pull_shake": "constant vertical pull 0.5 x pull-out + lateral triangle pulses; F = |(F_lat, F_pull)|"}
+         "pull_shake": "constant vertical pull {base_pull:g} x pull-out + lateral triangle pulses; F = |(F_lat, F_pull)|"}
+BASE_PULL = 0.5
+"""The base pull (fraction of the pull-out) of the pull-plus-shake rows the frequency plot joins."""
 PEAK_COLUMNS = ["shape", "pulse_hz", "duty", "threshold_force_N", "bracket_N", "impulse_at_threshold_Ns",
                 "dislodge_time_at_threshold_s", "pulls"]
 
@@ -82,16 +84,24 @@ def method_rows(cases) -> tuple[list[dict], list[dict]]:
         if s["task"] != "threshold" or "threshold_force_N" not in m:
             continue
         rows.append({"method": s["method"], "pulse_hz": s["pulse_hz"] if s["method"] != "continuous" else "",
+                     "base_pull": s["base_pull"] if s["method"] == "pull_shake" else "",
                      "threshold_over_pullout": m["threshold_force_N"] / m["quasi_static_pullout_N"],
-                     "loads": LOADS[s["method"]], **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
+                     "loads": LOADS[s["method"]].format(base_pull=s["base_pull"]),
+                     **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
         if (case.dir / "pulls.csv").exists():
             mine = _read_csv(case.dir / "pulls.csv")
-            pulls += mine
+            if rows[-1]["base_pull"] in ("", BASE_PULL):  # the plot's one line per method
+                pulls += mine
             out = [r for r in mine if r["dislodged"] == "True"]
             least = min(out, key=lambda r: float(r["impulse_Ns"]))  # over the bisection's pulls that dislodged
             rows[-1].update(least_impulse_Ns=float(least["impulse_Ns"]), least_impulse_peak_N=float(least["peak_force_N"]))
     order = list(LOADS)
-    return sorted(rows, key=lambda r: (float(r["pulse_hz"] or 0), order.index(r["method"]))), pulls
+    return sorted(rows, key=lambda r: (float(r["pulse_hz"] or 0), order.index(r["method"]), r["base_pull"])), pulls
+
+
+def name(row: dict) -> str:
+    """A methods.csv row's method, with its base pull where it has one: 'pull_shake 0.25 P'."""
+    return row["method"] + (f" {row['base_pull']:g} P" if row["base_pull"] != "" else "")
 
 
 def optimum_of(cases) -> tuple[dict | None, list[dict]]:
@@ -233,7 +243,8 @@ def frequency_plot(out: Path, rows: list[dict], evaluations: list[dict]) -> list
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for k, method in enumerate(LOADS):
-        mine = sorted([r for r in rows if r["method"] == method], key=lambda r: float(r["pulse_hz"] or 0))
+        mine = sorted([r for r in rows if r["method"] == method and r["base_pull"] in ("", BASE_PULL)],
+                      key=lambda r: float(r["pulse_hz"] or 0))
         for ax, key in zip(axes, ("threshold_over_pullout", "least_impulse_Ns")):
             if method == "continuous" and mine:
                 ax.axhline(float(mine[0][key]), color=f"C{k}", ls="--", label=method)
@@ -265,7 +276,7 @@ def _rankings(methods: list[dict]) -> list[str]:
                        ("least_impulse_Ns", "least impulse of the bisection's dislodging pulls"),
                        ("threshold_force_N", "peak force (threshold)")):
         ranked = sorted([r for r in methods if r.get(key, "") != ""], key=lambda r: float(r[key]))
-        lines += ["", f"Ranking by {label} (least first): " + ", ".join(f"{r['method']} ({float(r[key]):.4g})"
+        lines += ["", f"Ranking by {label} (least first): " + ", ".join(f"{name(r)} ({float(r[key]):.4g})"
                                                                            for r in ranked)]
     return lines
 

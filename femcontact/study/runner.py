@@ -22,6 +22,7 @@ import functools
 import itertools
 import json
 import os
+import select
 import shlex
 import signal
 import subprocess
@@ -431,10 +432,11 @@ class Runner:
         worker = self.pool.worker(slot) if self.pool is not None else None
         try:
             (case.dir / "result.json").unlink(missing_ok=True)
-            write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
+            # bookkeeping of a case not done yet: a rerun writes it again, so no fsync
+            write_text_atomic(case.dir / "scene.toml", to_toml(case.scene), sync=False)
             write_json_atomic(case.dir / "runner.json", {**self.provenance, "command": command, "ranks": self.ranks,
                                                          "slot": slot, "worker": worker and worker.pid,
-                                                         "started": time.time()})
+                                                         "started": time.time()}, sync=False)
             log = open(case.dir / "log.txt", "wb")
         except OSError as error:
             raise WriteError(describe(error, case.dir)) from None
@@ -529,8 +531,16 @@ class Runner:
                 else:
                     self._finish(case, result)
             self.progress.update(self.running)
-            time.sleep(0.02)
+            self.wait(0.02)
         self.close_workers()
+
+    def wait(self, timeout: float) -> None:
+        """Sleep `timeout` s, or less if every running job is a worker's and one replies (or dies)."""
+        pipes = [job.worker.process.stdout for job in self.running if job.worker is not None]
+        if pipes and len(pipes) == len(self.running):
+            select.select(pipes, [], [], timeout)
+        else:
+            time.sleep(timeout)
 
     def _finish(self, case: Case, result: dict) -> None:
         self.database.record(case)

@@ -29,9 +29,10 @@ from pathlib import Path
 ENTRY = "femcontact.cli:main"
 """What a worker calls per case: `module:function`, function(argv) -> exit code."""
 
-PRELOAD = ("mpi4py.MPI", "femcontact.cli.run", "femcontact.scenarios.case", "femcontact.solver.stepping",
-           "femcontact.outputs.fields", "femcontact.outputs.history", "femcontact.outputs.progress", "gmsh")
-"""Modules a worker imports before its first case: what a fresh process spends its start-up on."""
+PRELOAD = ("gmsh", "mpi4py.MPI", "femcontact.cli.run", "femcontact.scenarios.case", "femcontact.solver.stepping",
+           "femcontact.outputs.fields", "femcontact.outputs.history", "femcontact.outputs.progress")
+"""Modules a worker imports before its first case: what a fresh process spends its start-up on
+(gmsh first, as in `femcontact.cli.start_mpi_for_meshing`)."""
 
 CASES_PER_WORKER = 100
 """A worker is replaced after this many cases: its resident memory grows by about 2.6 MB per

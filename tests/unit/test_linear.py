@@ -35,7 +35,7 @@ def directions(scene_file: str, overrides: list, max_rank=None):
     R_u, R_r, _ = newton.assemble_residual(load)
     du, dr = newton.direction(load, R_u, R_r)
     update = (du.array.copy(), dr.copy(), newton.linear)
-    newton.linear = newton.linear.full
+    newton.linear = Factorization(simulation.problem, "full_")
     du, dr = newton.direction(load, R_u, R_r)
     return update, (du.array.copy(), dr.copy())
 

@@ -64,3 +64,17 @@ def test_python_m_femcontact_works_like_the_command():
     result = subprocess.run([sys.executable, "-m", "femcontact", "--help"], capture_output=True, text=True,
                             env={**os.environ}, cwd=ROOT)
     assert result.returncode == 0 and "run" in result.stdout and "study" in result.stdout
+
+
+@pytest.mark.parametrize("preset, expected", [({}, "1"), ({"OMPI_MCA_ess_singleton_isolated": "0"}, "0")])
+def test_a_process_without_a_launcher_starts_mpi_alone(preset, expected):
+    """`femcontact run` and `hertz` outside mpirun: Open MPI's singleton without its helper daemon
+    or transport probing (femcontact.cli.SINGLETON_MPI), a user's own setting kept; MPI works."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
+    code = ("import os; from femcontact.cli import start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
+            "print(os.environ['OMPI_MCA_ess_singleton_isolated'], os.environ['OMPI_MCA_pml'], "
+            "MPI.COMM_WORLD.allreduce(1), 'gmsh' in __import__('sys').modules)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**env, **preset},
+                            cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == [expected, "ob1", "1", "True"]
