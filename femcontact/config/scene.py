@@ -184,6 +184,9 @@ SOLVER = {
                        "'extrapolate' (plus the last increment's displacement change, scaled by dt, within a step): "
                        "a contact that opens under prescribed motion (a withdrawal) then starts closed",
                        choices=("none", "extrapolate")),
+    "curved_step": Field("bool", False, "when a full Newton step does not lower |R|, try first a step along a "
+                         "path that follows the residual's curvature (one more residual and one solve): a rigid "
+                         "body sliding a curved surface (a rounded rim) over contact nodes stays on it"),
     "contact_update": Field("bool", True, "where the bulk stiffness does not depend on the state (small strain), "
                             "factor it once and add the contact's few rows by a low-rank update (Woodbury); "
                             "off: factor the whole Jacobian every Newton iteration"),

@@ -18,8 +18,9 @@ where R_effects are the effects' own rigid-body terms (inertia M a(r), weight). 
 solver calls only the problem's forms and hooks; it names no effect.
 
 A line search (see `SchurNewton.line_search`) damps the semismooth Newton where
-stick/slip or contact sets change; before it, a rejected full step is retried along a curved
-path that follows the residual's curvature (`SchurNewton.curved_step`). A failed linear
+stick/slip or contact sets change; before it, where the scene sets `solver.curved_step`, a
+rejected full step is retried along a curved path that follows the residual's curvature
+(`SchurNewton.curved_step`). A failed linear
 solve, a NaN or too many iterations raise `NewtonFailure`, which the stepper answers by
 cutting the increment.
 """
@@ -300,8 +301,8 @@ class SchurNewton:
         """Step along (du, dr); returns the residual (R_u, R_r, scale) where it stops.
 
         The full step is taken when it lowers |R| (one assembly, reused by the next
-        iteration). When it does not, the curved step (`curved_step`: two assemblies and one
-        solve with the factor at hand) is tried. When that fails too but the step overshoots
+        iteration). When it does not and the scene asks for it (`solver.curved_step`), the
+        curved step (`curved_step`: two assemblies and one solve with the factor at hand) is tried. When that fails too but the step overshoots
         along the direction, that is the directional derivative g(alpha) = R(alpha) . (du, dr)
         (N*mm, the slope of the energy for a potential problem) turns from negative to
         positive, the step stops near the root of g (|g| <= |g(0)| / 2, at most
@@ -323,7 +324,7 @@ class SchurNewton:
         trial_norm = self.norm(*trial[:2])
         if trial_norm < (1 - 1e-4) * norm:
             return trial
-        curved = self.curved_step(load, u0, r0, du, dr, residual)
+        curved = self.curved_step(load, u0, r0, du, dr, residual) if p.scene["solver"]["curved_step"] else None
         if curved is not None:
             return curved
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
