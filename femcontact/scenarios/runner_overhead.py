@@ -15,6 +15,7 @@ A one-case study before them compiles the forms, so neither sweep pays for JIT c
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -26,6 +27,7 @@ OVERRIDES = '[scene]\nmesh.resolution = 0.3\n"steps.0.increments" = 2\n"steps.1.
 
 def run_study(root: Path, name: str, workers: bool, sweep: str) -> list[dict]:
     """Run a study of the coarse wedging scene (--force, one job); returns its cases' records."""
+    shutil.rmtree(root / name, ignore_errors=True)  # only this run's cases (a scene change renames them)
     path = root / f"{name}.toml"
     path.write_text(f'[study]\nname = "{name}"\nscene = "{SCENE}"\njobs = 1\nworkers = {str(workers).lower()}\n'
                     f"{OVERRIDES}{sweep}")
