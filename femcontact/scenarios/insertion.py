@@ -71,12 +71,12 @@ def force_history(scene: dict, history: list[dict]) -> dict:
         # moment about the tip: M_C + (C - tip) x F, C - tip = L_g (-sin theta, cos theta), F = (Fx, -Fz)
         M = M_C + lg * (-math.sin(theta)) * (-Fz) - lg * math.cos(theta) * Fx
         touching = [zone for zone in "AB" if row[f"contact_{zone}_force"] > floor]
+        side = -1.0 if touching[:1] == ["A"] else 1.0  # of the one zone touched
         if not touching:
             phase = "none"
         elif len(touching) == 2:
             phase = "two_point"
         elif rho > 0:  # where the rounding's centre P on the touching side lies from the edge E
-            side = -1.0 if touching[0] == "A" else 1.0
             axis, normal = (-math.sin(theta), math.cos(theta)), (math.cos(theta), math.sin(theta))
             P = [row[f"tip_{c}"] + side * (r - rho) * normal[k] + rho * axis[k] for k, c in enumerate(("x", ax))]
             PE = (P[0] - side * hole["width"] / 2, P[1] + h_c)
@@ -84,7 +84,6 @@ def force_history(scene: dict, history: list[dict]) -> dict:
             on_rounding = PE[1] > 0 and PE[0] * axis[0] + PE[1] * axis[1] > 0  # not yet on the wall or side
             phase = "chamfer" if on_cone else "edge" if on_rounding else "one_point"
         else:
-            side = -1.0 if touching[0] == "A" else 1.0
             corner_y = row[f"tip_{ax}"] + side * r * math.sin(theta)
             on_corner = row.get("corner_contacts", 1) > 0
             phase = "chamfer" if on_corner and corner_y > -h_c - h_contact / 2 else "one_point"

@@ -231,22 +231,23 @@ class SchurNewton:
             raise NewtonFailure(str(error), []) from None
         S = K_rr - np.array([[K_ru[i].dot(X[k]) for k in range(n_r)] for i in range(n_r)])
         S_ff = S[np.ix_(free, free)]
-        shifted = False
-        dr = self._condensed_step(K_ru, X, S_ff, y, R_r, shifted)
-        if free.any() and dr[free] @ S_ff @ dr[free] <= 0:  # no stiffness along the step: see _rigid_step
-            shifted = True
-            dr = self._condensed_step(K_ru, X, S_ff, y, R_r, shifted)
+        dr, shifted = self._condensed_step(K_ru, S_ff, y, R_r)
         self._factored = (K_ru, X, S_ff, shifted)
         return self._assemble_step(y, X, dr), dr
 
-    def _condensed_step(self, K_ru, X, S_ff, y, R_r, shifted: bool) -> np.ndarray:
-        """The rigid step dr from S dr = -R_r + K_ru y (free dofs; see `_rigid_step`)."""
+    def _condensed_step(self, K_ru, S_ff, y, R_r, shifted: bool | None = None) -> tuple[np.ndarray, bool]:
+        """The rigid step dr from S dr = -R_r + K_ru y (free dofs; see `_rigid_step`), and whether
+        S was shifted. `shifted=None`: shifted only where the plain step meets no stiffness."""
         free = self.problem.rigid.free
         dr = np.zeros(len(free))
         if free.any():
-            rhs_r = -R_r + np.array([K_ru[i].dot(y) for i in range(len(free))])
-            dr[free] = self._rigid_step(S_ff, rhs_r[free], shifted)
-        return dr
+            rhs_r = (-R_r + np.array([K_ru[i].dot(y) for i in range(len(free))]))[free]
+            dr[free] = self._rigid_step(S_ff, rhs_r, shifted=bool(shifted))
+            if shifted is None:
+                shifted = bool(dr[free] @ S_ff @ dr[free] <= 0)  # no stiffness along the step
+                if shifted:
+                    dr[free] = self._rigid_step(S_ff, rhs_r, shifted=True)
+        return dr, bool(shifted)
 
     @staticmethod
     def _assemble_step(y, X, dr):
@@ -265,7 +266,7 @@ class SchurNewton:
             y = self.linear.solve([R_u])[0]
         except LinearSolveFailed:
             return None
-        dr = self._condensed_step(K_ru, X, S_ff, y, R_r, shifted)
+        dr, _ = self._condensed_step(K_ru, S_ff, y, R_r, shifted)
         return self._assemble_step(y, X, dr), dr
 
     def _rigid_step(self, S_ff, rhs, shifted: bool = False) -> np.ndarray:
@@ -324,7 +325,7 @@ class SchurNewton:
         trial_norm = self.norm(*trial[:2])
         if trial_norm < (1 - 1e-4) * norm:
             return trial
-        curved = self.curved_step(load, u0, r0, du, dr, residual) if p.scene["solver"]["curved_step"] else None
+        curved = self.curved_step(load, u0, r0, du, dr, residual, norm) if p.scene["solver"]["curved_step"] else None
         if curved is not None:
             return curved
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
@@ -370,7 +371,7 @@ class SchurNewton:
         self._update(u0, r0, du, dr, best[1])
         return self.assemble_residual(load)
 
-    def curved_step(self, load, u0, r0, du, dr, residual):
+    def curved_step(self, load, u0, r0, du, dr, residual, norm):
         """Follow the residual's curvature along the Newton direction d (geodesic acceleration):
         R(x + a d) = (1 - a) R_0 + a^2 Q + O(a^3), Q estimated from one residual at a = h =
         CURVE_PROBE; the path x + a d + a^2 c with J c = -Q cancels the quadratic term. It keeps
@@ -379,8 +380,7 @@ class SchurNewton:
         which exceeds the contact's penetration (nanometres under the stiff Nitsche/penalty
         term) long before s reaches the micrometres a step needs, so straight steps either lose
         the contact or are cut to a fraction of a micrometre. Returns the residual at the first of
-        a = 1, 1/2 on the path that lowers |R| (the state left there), else None."""
-        p = self.problem
+        a = 1, 1/2 on the path that lowers |R| below `norm` = |R_0| (the state left there), else None."""
         h = CURVE_PROBE
         self._update(u0, r0, du, dr, h)
         R_u, R_r, _ = self.assemble_residual(load)
@@ -390,15 +390,8 @@ class SchurNewton:
         R_u.destroy()
         if step is None:
             return None
-        dc, rc = step
-        norm = self.norm(*residual[:2])
         for alpha in (1.0, 0.5):
-            u0.copy(p.u.vector)
-            p.u.vector.axpy(alpha, du)
-            p.u.vector.axpy(alpha * alpha, dc)
-            p.u.x.scatter_forward()
-            p.rigid.values[:] = r0 + alpha * dr + alpha * alpha * rc
-            p.rigid.sync()
+            self._update(u0, r0, du, dr, alpha, curve=step)
             trial = self.assemble_residual(load)
             if self.norm(*trial[:2]) < (1 - 1e-4 * alpha) * norm:
                 return trial
@@ -410,11 +403,16 @@ class SchurNewton:
         free = self.problem.rigid.free
         return float(R_u.dot(du) + R_r[free] @ dr[free])
 
-    def _update(self, u0, r0, du, dr, alpha) -> None:
+    def _update(self, u0, r0, du, dr, alpha, curve=None) -> None:
+        """The state (u0, r0) + alpha (du, dr), plus alpha^2 (dc, dr_c) along a `curve` (dc, dr_c)."""
         p = self.problem
         u0.copy(p.u.vector)
         p.u.vector.axpy(alpha, du)
+        r = r0 + alpha * dr
+        if curve is not None:
+            p.u.vector.axpy(alpha * alpha, curve[0])
+            r = r + alpha * alpha * curve[1]
         p.u.x.scatter_forward()
-        p.rigid.values[:] = r0 + alpha * dr
+        p.rigid.values[:] = r
         p.rigid.sync()
 

@@ -90,13 +90,18 @@ def method_rows(cases) -> tuple[list[dict], list[dict]]:
                      **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
         if (case.dir / "pulls.csv").exists():
             mine = _read_csv(case.dir / "pulls.csv")
-            if rows[-1]["base_pull"] in ("", BASE_PULL):  # the plot's one line per method
+            if default_base_pull(rows[-1]):  # the plot's one line per method
                 pulls += mine
             out = [r for r in mine if r["dislodged"] == "True"]
             least = min(out, key=lambda r: float(r["impulse_Ns"]))  # over the bisection's pulls that dislodged
             rows[-1].update(least_impulse_Ns=float(least["impulse_Ns"]), least_impulse_peak_N=float(least["peak_force_N"]))
     order = list(LOADS)
     return sorted(rows, key=lambda r: (float(r["pulse_hz"] or 0), order.index(r["method"]), r["base_pull"])), pulls
+
+
+def default_base_pull(row: dict) -> bool:
+    """Whether a methods.csv row is one the plots join per method: no base pull, or BASE_PULL's."""
+    return row["base_pull"] in ("", BASE_PULL)
 
 
 def name(row: dict) -> str:
@@ -243,7 +248,7 @@ def frequency_plot(out: Path, rows: list[dict], evaluations: list[dict]) -> list
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for k, method in enumerate(LOADS):
-        mine = sorted([r for r in rows if r["method"] == method and r["base_pull"] in ("", BASE_PULL)],
+        mine = sorted([r for r in rows if r["method"] == method and default_base_pull(r)],
                       key=lambda r: float(r["pulse_hz"] or 0))
         for ax, key in zip(axes, ("threshold_over_pullout", "least_impulse_Ns")):
             if method == "continuous" and mine:
