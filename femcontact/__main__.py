@@ -1,6 +1,4 @@
 """`python -m femcontact ...` works like `femcontact ...`."""
-import sys
+from femcontact.cli import console
 
-from femcontact.cli import main
-
-sys.exit(main())
+console()

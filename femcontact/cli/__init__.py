@@ -5,6 +5,7 @@ Each command lives in its own module, imported only when called, so that
 provides `add_arguments(parser)` and `command(args) -> int`.
 """
 import argparse
+import ctypes
 import importlib
 import logging
 import os
@@ -56,6 +57,35 @@ def main(argv=None) -> int:
         return 2
 
 
+def console() -> None:
+    """The `femcontact` program (and `python -m femcontact`): `main`, then `end_process`."""
+    end_process(main())
+
+
+def end_process(code: int) -> None:
+    """End this process with exit status `code`, skipping the interpreter's teardown.
+
+    Python frees every module's objects one by one at exit: with DOLFINx, UFL and PETSc loaded
+    that took 0.12 s after `femcontact hertz` had printed its result (median of 5 runs, 0.13 s
+    against 0.02 s). What a normal exit does that matters is done first: logging's handlers and
+    Python's and C's standard streams flushed, PETSc and MPI finalised (under mpirun a rank that
+    skips MPI_Finalize is reported as failed)."""
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe: what the normal exit would have met too
+            pass
+    petsc = sys.modules.get("petsc4py.PETSc")
+    if petsc is not None:
+        petsc._finalize()
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
+        mpi.Finalize()
+    ctypes.CDLL(None).fflush(None)  # what C libraries printed (PETSc's -log_view at finalisation)
+    os._exit(code)
+
+
 RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
 """Where MPI launchers (Open MPI, PMIx, MPICH/Hydra) put a process's rank, before MPI starts."""
 
@@ -90,4 +120,4 @@ def launch_rank() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

@@ -9,6 +9,7 @@ with the contact traction t summed from what the effects add. Effects are built 
 order of `femcontact.effects.components_for`; `built` lists them, and only they exist:
 a frictionless quasi-static scene has no history state at all.
 """
+import functools
 from types import SimpleNamespace
 
 import numpy as np
@@ -23,6 +24,15 @@ from femcontact.physics.rotation import rotation_numpy
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 DEFORMABLE = {"peg": "hole", "hole": "peg", "indenter": "block"}
 """The deformable body for each choice of rigid body (a snap fit's pin mates with `spring`)."""
+
+
+class Forms(SimpleNamespace):
+    """A problem's compiled forms; the whole Jacobian only when a solver first asks for it (with
+    the low-rank contact update it is needed only where a contact set outgrows the update)."""
+
+    @functools.cached_property
+    def jacobian(self):
+        return fem.form(self.jacobian_integrand)
 
 
 class Problem:
@@ -82,17 +92,17 @@ class Problem:
     def _compile(self) -> SimpleNamespace:
         """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
         stiffness where it does not depend on the state, only on `bulk_constants` (the solver
-        then factors it once: solver/linear.py)."""
+        then factors it once: solver/linear.py); the whole `jacobian` is compiled when first used."""
         du = ufl.TrialFunction(self.V)
         contact = self.contact_integrand * self.ds_contact
         d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
         bulk_jacobian = ufl.algorithms.expand_derivatives(ufl.derivative(self.bulk, self.u, du))
         state_free = not bulk_jacobian.coefficients()
         self.bulk_constants = bulk_jacobian.constants() if state_free else ()
-        return SimpleNamespace(
+        return Forms(
             residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
             jacobian_bulk=fem.form(bulk_jacobian) if state_free and self.scene["solver"]["contact_update"] else None,
-            jacobian=fem.form(ufl.derivative(self.bulk + contact, self.u, du)),
+            jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du),
             jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
             contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])
 

@@ -535,7 +535,10 @@ class Runner:
         self.close_workers()
 
     def wait(self, timeout: float) -> None:
-        """Sleep `timeout` s, or less if every running job is a worker's and one replies (or dies)."""
+        """Sleep `timeout` s, or less if every running job is a worker's and one replies (or dies);
+        not at all when nothing runs (a slot is free for the next case)."""
+        if not self.running:
+            return
         pipes = [job.worker.process.stdout for job in self.running if job.worker is not None]
         if pipes and len(pipes) == len(self.running):
             select.select(pipes, [], [], timeout)

@@ -78,3 +78,16 @@ def test_a_process_without_a_launcher_starts_mpi_alone(preset, expected):
                             cwd=ROOT)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == [expected, "ob1", "1", "True"]
+
+
+def test_the_command_ends_without_teardown_but_with_its_output_and_status():
+    """femcontact.cli.end_process: Python's and C's buffered output written, PETSc and MPI
+    finalised (PETSc's -log_view prints at finalisation), the exit status kept."""
+    code = ("import sys; from femcontact.cli import end_process, start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
+            "import petsc4py; petsc4py.init(['x', '-log_view']); from petsc4py import PETSc; "
+            "print('written', end=''); sys.stderr.write('error'); end_process(3)")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert result.returncode == 3
+    assert result.stdout.startswith("written") and "PETSc Performance Summary" in result.stdout
+    assert result.stderr.startswith("error")
