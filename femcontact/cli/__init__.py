@@ -31,12 +31,17 @@ def _warnings_and_errors(record: logging.LogRecord) -> bool:
     return record.levelno >= logging.WARNING
 
 
+def quiet_logging() -> None:
+    """FFCx's JIT compiles through setuptools, which logs every compiler call at INFO on the root
+    logger: keep warnings and errors only, so a run's output is its progress (the filter is added
+    once per process, however often this is called)."""
+    logging.getLogger().addFilter(_warnings_and_errors)
+
+
 def main(argv=None) -> int:
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
-    # FFCx's JIT compiles through setuptools, which logs every compiler call at INFO on the root
-    # logger: keep warnings and errors only, so a run's output is its progress
-    logging.getLogger().addFilter(_warnings_and_errors)  # once per process, however often main() runs
+    quiet_logging()
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = argparse.ArgumentParser(prog="femcontact", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
