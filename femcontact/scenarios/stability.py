@@ -25,6 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from femcontact.references import two_point_statics
+from geometry.placement import peg_pose
+
 ROOT = Path(__file__).resolve().parents[2]
 OUT = Path("results/stability")
 PEG_WIDTH = 40.0
@@ -94,6 +97,38 @@ def check(result: dict | None) -> str | None:
     return None if structured or reason.startswith("time limit") else f"unstructured failure: {reason}"
 
 
+def friction_needed(scene: dict) -> float | None:
+    """The least mu for which a rigid peg in the scene's two-point contact holds the first step's
+    load (`references.two_point_statics`); None where that model does not apply (3-D, no
+    two-point placement)."""
+    if scene.get("dim") != 2 or scene.get("peg", {}).get("placement") != "two_point":
+        return None
+    pose = peg_pose(scene)
+    step = scene["steps"][0]
+    force, couple = step["force"] or [0.0, 0.0], (step["moment"] or [0.0])[0]
+    return two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
+                                             pose.points[step["load_point"]], couple)
+
+
+def equilibrium_summary(results: dict) -> list[str]:
+    """How the converged cases split by whether a rigid two-point equilibrium exists (mu >= the
+    friction it needs): a failure where one exists is the solver's."""
+    counts = {}
+    for scene, result in results.values():
+        needed = friction_needed(scene) if scene else None
+        if needed is None or result is None:
+            continue
+        key = scene["contact"]["mu"] >= needed
+        ok, total = counts.get(key, (0, 0))
+        counts[key] = (ok + (result["status"] == "ok"), total + 1)
+    lines = []
+    for key, label in ((True, "with a rigid two-point equilibrium (mu >= the friction it needs)"),
+                       (False, "without one (the rigid peg slides: mu < the friction it needs)")):
+        if key in counts:
+            lines.append(f"- converged {counts[key][0]} of the {counts[key][1]} cases {label}")
+    return lines + [""] if lines else []
+
+
 def report(studies: list[tuple[str, list]]) -> tuple[str, int]:
     lines = ["# Stability sweep", ""]
     defects = 0
@@ -109,10 +144,15 @@ def report(studies: list[tuple[str, list]]) -> tuple[str, int]:
         defects += len(found)
         lines += [f"## {name}: {len(ok)} of {len(results)} converged ({100 * len(ok) / max(len(results), 1):.0f} %), "
                   f"{len(found)} defects (NaN, traceback, unstructured failure, no result)", ""]
-        failures = [(cid, r["reason"]) for cid, (_, r) in results.items() if r and r["status"] != "ok"]
+        lines += equilibrium_summary(results)
+        failures = [(cid, scene, r["reason"]) for cid, (scene, r) in results.items() if r and r["status"] != "ok"]
         if failures:
-            lines += ["| case | failure (structured) |", "|---|---|"]
-            lines += [f"| {cid} | {str(reason)[:160]} |" for cid, reason in failures]
+            lines += ["| case | mu | friction needed (rigid, two-point) | failure (structured) |", "|---|---|---|---|"]
+            for cid, scene, reason in failures:
+                needed = friction_needed(scene) if scene else None
+                mu = scene.get("contact", {}).get("mu", float("nan")) if scene else float("nan")
+                lines.append(f"| {cid} | {mu:.3g} | {'-' if needed is None else f'{needed:.3g}'} | "
+                             f"{str(reason)[:160]} |")
             lines.append("")
         for cid, defect in found:
             lines.append(f"- DEFECT {cid}: {defect}")

@@ -1,0 +1,62 @@
+"""Statics of a rigid peg in two-point contact (femcontact.references.two_point_statics) against
+the wedging condition of reference §1 and against contact forces built inside the friction cones."""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from femcontact.config.scene import load_scene
+from femcontact.references import two_point_statics as statics
+from geometry.placement import peg_pose
+
+SCENE = Path(__file__).parents[2] / "scenes" / "wedging_2d.toml"
+
+
+def pose(depth: float, clearance: float = 1e-8, width: float = 40.0):
+    scene = load_scene(SCENE,
+                       [f"peg.insertion_depth={depth}", f"hole.width={width * (1 + clearance)}"])
+    return peg_pose(scene)
+
+
+@pytest.mark.parametrize("depth", [2.0, 5.0, 9.0])
+def test_a_push_along_the_axis_needs_the_wedging_friction(depth):
+    """Pushed straight in (or pulled straight out) at the peg top, the peg in two-point contact
+    jams exactly in the wedging range l < mu d (reference §1): it needs mu = l/d, to the order of
+    the tilt (here 1e-8 rad; the contact forces grow without bound towards that limit)."""
+    placed = pose(depth)
+    contacts = statics.peg_in_hole_contacts(placed)
+    axis = placed.rotation @ np.array([0.0, 1.0])
+    for sign in (-1.0, 1.0):
+        needed = statics.friction_needed(contacts, sign * axis, placed.points["peg_top"], 0.0)
+        assert needed == pytest.approx(depth / 40.0, rel=1e-5)
+
+
+def test_a_couple_the_way_the_peg_leans_needs_no_friction_and_the_other_way_the_wedging_friction():
+    """Counter-clockwise (the top to -x, the way the peg leans) the normal forces alone balance
+    the couple, up to the tilt (the normals are parallel to within it). Clockwise only friction
+    can, with normal forces growing without bound: the peg jams in the wedging range, mu > l/d."""
+    placed = pose(5.0, clearance=1e-5)
+    contacts = statics.peg_in_hole_contacts(placed)
+    top = placed.points["peg_top"]
+    assert 0 < statics.friction_needed(contacts, [0.0, 0.0], top, 100.0) <= placed.tilt
+    assert statics.friction_needed(contacts, [0.0, 0.0], top, -100.0) == pytest.approx(5.0 / 40.0, abs=2 * placed.tilt)
+
+
+def test_loads_built_from_contact_forces_in_the_cones_have_an_equilibrium_and_the_friction_is_scale_free():
+    placed = pose(5.0, clearance=1e-3)
+    contacts = statics.peg_in_hole_contacts(placed)
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        mu = rng.uniform(0.05, 0.8)
+        force, moment = np.zeros(2), 0.0
+        for point, normal in contacts:  # a contact force strictly inside its cone
+            tangent = np.array([-normal[1], normal[0]])
+            f = rng.uniform(0.1, 10) * (normal + rng.uniform(-0.99, 0.99) * mu * tangent)
+            force, moment = force + f, moment + point[0] * f[1] - point[1] * f[0]
+        at = placed.points["peg_top"]
+        couple = -moment - (at[0] * -force[1] - at[1] * -force[0])  # the load balancing them, applied at the top
+        assert statics.has_equilibrium(contacts, -force, at, couple, mu)
+        needed = statics.friction_needed(contacts, -force, at, couple)
+        assert needed <= mu
+        assert statics.friction_needed(contacts, -1e3 * force, at, 1e3 * couple) == pytest.approx(needed, rel=1e-5)
