@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.references import two_point_statics
+from femcontact.study.runner import load_study
 from geometry.placement import peg_pose
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -134,7 +135,8 @@ def report(studies: list[tuple[str, list]]) -> tuple[str, int]:
     defects = 0
     for name, rows in studies:
         results = {}
-        for case_dir in sorted((OUT.parent / name / "cases").glob("*")):
+        study = load_study(OUT / f"{name}.toml", results_root=OUT.parent)  # this sweep's cases, not older ones
+        for case_dir in sorted(case.dir for case in study.cases):
             scene = json.loads((case_dir / "scene.json").read_text()) if (case_dir / "scene.json").exists() else {}
             path = case_dir / "result.json"
             results[case_dir.name] = (scene, json.loads(path.read_text()) if path.exists() else None)
