@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 
-from femcontact.cli import start_mpi_for_meshing
+from femcontact.process import start_mpi_for_meshing
 from femcontact.errors import InputError
 
 

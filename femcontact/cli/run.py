@@ -18,7 +18,7 @@ import traceback
 from pathlib import Path
 
 from femcontact.config.scene import case_id, load_scene
-from femcontact.cli import start_mpi_for_meshing
+from femcontact.process import start_mpi_for_meshing
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic
 

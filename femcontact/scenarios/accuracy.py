@@ -260,7 +260,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    from femcontact.cli import quiet_logging
+    from femcontact.process import quiet_logging
 
     quiet_logging()
     sys.exit(main())

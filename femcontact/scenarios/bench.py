@@ -327,7 +327,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    from femcontact.cli import quiet_logging
+    from femcontact.process import quiet_logging
 
     quiet_logging()
     main()

@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.references import two_point_statics
-from femcontact.study.runner import load_study
+from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.config.schema import set_key
 from geometry.placement import peg_pose
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -130,13 +131,23 @@ def equilibrium_summary(results: dict) -> list[str]:
     return lines + [""] if lines else []
 
 
-def report(studies: list[tuple[str, list]]) -> tuple[str, int]:
+def case_dirs(name: str, rows: list[dict], scene_path: Path) -> list[Path]:
+    """The directories of a sweep's cases, as the study runner names them (by scene hash)."""
+    dirs = set()
+    for row in rows:
+        data = read_toml(scene_path)
+        for key, value in row.items():
+            set_key(data, key, value)
+        dirs.add(OUT.parent / name / "cases" / case_id(resolve(data)))
+    return sorted(dirs)
+
+
+def report(studies: list[tuple[str, list, Path]]) -> tuple[str, int]:
     lines = ["# Stability sweep", ""]
     defects = 0
-    for name, rows in studies:
+    for name, rows, scene_path in studies:
         results = {}
-        study = load_study(OUT / f"{name}.toml", results_root=OUT.parent)  # this sweep's cases, not older ones
-        for case_dir in sorted(case.dir for case in study.cases):
+        for case_dir in case_dirs(name, rows, scene_path):  # this sweep's cases, not older ones
             scene = json.loads((case_dir / "scene.json").read_text()) if (case_dir / "scene.json").exists() else {}
             path = case_dir / "result.json"
             results[case_dir.name] = (scene, json.loads(path.read_text()) if path.exists() else None)
@@ -185,7 +196,7 @@ def main(argv=None) -> int:
         path.write_text(study_file(name, str(scene), rows, ranks))
         print(f"== {name}: {len(rows)} cases (seed {args.seed}), study file {path}", flush=True)
         subprocess.run([sys.executable, "-m", "femcontact", "study", str(path), "--results", str(OUT.parent)])
-    text, defects = report([(name, rows) for name, rows, _, _ in studies if rows])
+    text, defects = report([(name, rows, scene) for name, rows, scene, _ in studies if rows])
     (OUT / "stability.md").write_text(text)
     print(text)
     print(f"written: {OUT / 'stability.md'}")
@@ -193,7 +204,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    from femcontact.cli import quiet_logging
+    from femcontact.process import quiet_logging
 
     quiet_logging()
     sys.exit(main())

@@ -29,7 +29,7 @@ from pathlib import Path
 ENTRY = "femcontact.cli:main"
 """What a worker calls per case: `module:function`, function(argv) -> exit code."""
 
-PRELOAD = ("femcontact.cli:start_mpi_for_meshing", "femcontact.cli.run", "femcontact.scenarios.case",
+PRELOAD = ("femcontact.process:start_mpi_for_meshing", "femcontact.cli.run", "femcontact.scenarios.case",
            "femcontact.solver.stepping", "femcontact.outputs.fields", "femcontact.outputs.history",
            "femcontact.outputs.progress")
 """What a worker imports (`module`) or calls (`module:function`) before its first case: what a
@@ -220,6 +220,6 @@ def clean_up(baseline: dict) -> None:
 
 if __name__ == "__main__":
     serve(sys.argv[1], sys.argv[2:])
-    from femcontact.cli import end_process
+    from femcontact.process import end_process
 
     end_process(0)  # the runner waits for its workers to end: no interpreter teardown (0.1-0.3 s)

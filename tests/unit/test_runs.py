@@ -69,9 +69,9 @@ def test_python_m_femcontact_works_like_the_command():
 @pytest.mark.parametrize("preset, expected", [({}, "1"), ({"OMPI_MCA_ess_singleton_isolated": "0"}, "0")])
 def test_a_process_without_a_launcher_starts_mpi_alone(preset, expected):
     """`femcontact run` and `hertz` outside mpirun: Open MPI's singleton without its helper daemon
-    or transport probing (femcontact.cli.SINGLETON_MPI), a user's own setting kept; MPI works."""
+    or transport probing (femcontact.process.SINGLETON_MPI), a user's own setting kept; MPI works."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
-    code = ("import os; from femcontact.cli import start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
+    code = ("import os; from femcontact.process import start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
             "print(os.environ['OMPI_MCA_ess_singleton_isolated'], os.environ['OMPI_MCA_pml'], "
             "MPI.COMM_WORLD.allreduce(1), 'gmsh' in __import__('sys').modules)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**env, **preset},
@@ -81,9 +81,9 @@ def test_a_process_without_a_launcher_starts_mpi_alone(preset, expected):
 
 
 def test_the_command_ends_without_teardown_but_with_its_output_and_status():
-    """femcontact.cli.end_process: Python's and C's buffered output written, PETSc and MPI
+    """femcontact.process.end_process: Python's and C's buffered output written, PETSc and MPI
     finalised (PETSc's -log_view prints at finalisation), the exit status kept."""
-    code = ("import sys; from femcontact.cli import end_process, start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
+    code = ("import sys; from femcontact.process import end_process, start_mpi_for_meshing; MPI = start_mpi_for_meshing(); "
             "import petsc4py; petsc4py.init(['x', '-log_view']); from petsc4py import PETSc; "
             "print('written', end=''); sys.stderr.write('error'); end_process(3)")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
