@@ -112,15 +112,14 @@ def friction_needed(scene: dict) -> float | None:
                                              pose.points[step["load_point"]], couple)
 
 
-def equilibrium_summary(results: dict) -> list[str]:
+def equilibrium_summary(results: dict, needed: dict) -> list[str]:
     """How the converged cases split by whether a rigid two-point equilibrium exists (mu >= the
-    friction it needs): a failure where one exists is the solver's."""
+    friction it needs, `needed` by case id): a failure where one exists is the solver's."""
     counts = {}
-    for scene, result in results.values():
-        needed = friction_needed(scene) if scene else None
-        if needed is None or result is None:
+    for cid, (scene, result) in results.items():
+        if needed[cid] is None or result is None:
             continue
-        key = scene["contact"]["mu"] >= needed
+        key = scene["contact"]["mu"] >= needed[cid]
         ok, total = counts.get(key, (0, 0))
         counts[key] = (ok + (result["status"] == "ok"), total + 1)
     lines = []
@@ -133,9 +132,9 @@ def equilibrium_summary(results: dict) -> list[str]:
 
 def case_dirs(name: str, rows: list[dict], scene_path: Path) -> list[Path]:
     """The directories of a sweep's cases, as the study runner names them (by scene hash)."""
-    dirs = set()
+    base, dirs = read_toml(scene_path), set()
     for row in rows:
-        data = read_toml(scene_path)
+        data = json.loads(json.dumps(base))
         for key, value in row.items():
             set_key(data, key, value)
         dirs.add(OUT.parent / name / "cases" / case_id(resolve(data)))
@@ -157,14 +156,14 @@ def report(studies: list[tuple[str, list, Path]]) -> tuple[str, int]:
         defects += len(found)
         lines += [f"## {name}: {len(ok)} of {len(results)} converged ({100 * len(ok) / max(len(results), 1):.0f} %), "
                   f"{len(found)} defects (NaN, traceback, unstructured failure, no result)", ""]
-        lines += equilibrium_summary(results)
+        needed = {cid: friction_needed(scene) if scene else None for cid, (scene, _) in results.items()}
+        lines += equilibrium_summary(results, needed)
         failures = [(cid, scene, r["reason"]) for cid, (scene, r) in results.items() if r and r["status"] != "ok"]
         if failures:
             lines += ["| case | mu | friction needed (rigid, two-point) | failure (structured) |", "|---|---|---|---|"]
             for cid, scene, reason in failures:
-                needed = friction_needed(scene) if scene else None
                 mu = scene.get("contact", {}).get("mu", float("nan")) if scene else float("nan")
-                lines.append(f"| {cid} | {mu:.3g} | {'-' if needed is None else f'{needed:.3g}'} | "
+                lines.append(f"| {cid} | {mu:.3g} | {'-' if needed[cid] is None else f'{needed[cid]:.3g}'} | "
                              f"{str(reason)[:160]} |")
             lines.append("")
         for cid, defect in found:

@@ -20,9 +20,8 @@ solver calls only the problem's forms and hooks; it names no effect.
 A line search (see `SchurNewton.line_search`) damps the semismooth Newton where
 stick/slip or contact sets change; before it, where the scene sets `solver.curved_step`, a
 rejected full step is retried along a curved path that follows the residual's curvature
-(`SchurNewton.curved_step`). A failed linear
-solve, a NaN or too many iterations raise `NewtonFailure`, which the stepper answers by
-cutting the increment.
+(`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
+`NewtonFailure`, which the stepper answers by cutting the increment.
 """
 import numpy as np
 from dolfinx import la
@@ -303,18 +302,18 @@ class SchurNewton:
 
         The full step is taken when it lowers |R| (one assembly, reused by the next
         iteration). When it does not and the scene asks for it (`solver.curved_step`), the
-        curved step (`curved_step`: two assemblies and one solve with the factor at hand) is tried. When that fails too but the step overshoots
-        along the direction, that is the directional derivative g(alpha) = R(alpha) . (du, dr)
-        (N*mm, the slope of the energy for a potential problem) turns from negative to
-        positive, the step stops near the root of g (|g| <= |g(0)| / 2, at most
-        ROOT_EVALUATIONS assemblies; each trial the root of a quadratic with Newton's slope
-        -g(0), from 0 or, where g is still on its line at a_lo, from a_lo: the contact's kink
-        lies beyond it): a
-        semismooth Newton step linearised on too few contact nodes (a cold contact set, a
-        growing contact zone) drives the body past equilibrium into a far too large contact
-        set, which the following iterations could only shed a few nodes at a time; stopping
-        at the root approaches the contact set from inside. Failing both, the longest of
-        1/2, 1/4, ... 1/4096 that lowers |R| (else the best found)."""
+        curved step (`curved_step`: two assemblies and one solve with the factor at hand) is
+        tried. When that fails too but the step overshoots along the direction, that is the
+        directional derivative g(alpha) = R(alpha) . (du, dr) (N*mm, the slope of the energy
+        for a potential problem) turns from negative to positive, the step stops near the root
+        of g (|g| <= |g(0)| / 2, at most ROOT_EVALUATIONS assemblies; each trial the root of a
+        quadratic with Newton's slope -g(0), from 0 or, where g is still on its line at a_lo,
+        from a_lo: the contact's kink lies beyond it): a semismooth Newton step linearised on
+        too few contact nodes (a cold contact set, a growing contact zone) drives the body past
+        equilibrium into a far too large contact set, which the following iterations could
+        only shed a few nodes at a time; stopping at the root approaches the contact set from
+        inside. Failing both, the longest of 1/2, 1/4, ... 1/4096 that lowers |R| (else the
+        best found)."""
         p = self.problem
         norm = self.norm(*residual[:2])
         u0, r0 = p.u.vector.copy(), p.rigid.values.copy()

@@ -89,7 +89,7 @@ class Problem:
         self._contact_terms.append(integrand)
 
     # -- forms ---------------------------------------------------------------------------
-    def _compile(self) -> SimpleNamespace:
+    def _compile(self) -> Forms:
         """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
         stiffness where it does not depend on the state, only on `bulk_constants` (the solver
         then factors it once: solver/linear.py); the whole `jacobian` is compiled when first used."""

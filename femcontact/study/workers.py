@@ -133,10 +133,10 @@ def serve(entry: str, preload: list[str]) -> None:
         os.dup2(quiet, fd)
     for name in preload:
         try:
-            module, _, function = name.partition(":")
-            loaded = importlib.import_module(module)
-            if function:
-                getattr(loaded, function)()
+            if ":" in name:
+                _function(name)()
+            else:
+                importlib.import_module(name)
         except Exception:  # the case that needs it meets the error again, in its own log
             pass
     gc.collect()
@@ -151,6 +151,12 @@ def serve(entry: str, preload: list[str]) -> None:
         replies.flush()
 
 
+def _function(spec: str):
+    """The function a `module:function` spec names (its module imported)."""
+    module, function = spec.split(":")
+    return getattr(importlib.import_module(module), function)
+
+
 def _run_case(entry: str, directory: str, argv: list[str], quiet: int) -> int:
     """entry(argv) in `directory` with stdout and stderr appended to its log.txt; the exit code a
     process running it would have."""
@@ -160,8 +166,7 @@ def _run_case(entry: str, directory: str, argv: list[str], quiet: int) -> int:
     os.close(log)
     try:
         os.chdir(directory)
-        module, function = entry.split(":")
-        return getattr(importlib.import_module(module), function)(argv) or 0
+        return _function(entry)(argv) or 0
     except SystemExit as exit:  # as the interpreter ends a process: an int code, or a message and 1
         if exit.code is None or isinstance(exit.code, int):
             return exit.code or 0
