@@ -24,6 +24,12 @@ from petsc4py import PETSc
 from femcontact.effects.base import Effect
 from femcontact.physics.rotation import rotation_numpy
 
+TOUCHING = 1e3 * np.finfo(float).eps
+"""Gap (relative to the body's size) within which a corner counts as touching: a corner placed
+on the surface lands there to round-off (3.6e-15 mm in the default 2-D wedging case). As the
+Nitsche term counts its kink as active, a touching corner already gets the contact stiffness
+in Newton's first iteration, so the body cannot turn into the surface unopposed."""
+
 
 def corner_points(rigid: dict) -> np.ndarray:
     """Sharp corners of a 2-D rectangle in its shape frame about the reference point."""
@@ -51,6 +57,8 @@ class RigidCorners(Effect):
         self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
         self.active_count = 0
         self.search = 4 * p.model.h_contact
+        extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
+        self.touching = TOUCHING * extent  # mm
         n = len(self.points)
         self.tangential_old = np.zeros(n)
         self.tangential = np.zeros(n)
@@ -95,7 +103,7 @@ class RigidCorners(Effect):
         point = xa + s * edge
         gap = (corner - point) @ normal
         kappa = float(p.constants["gamma"].value * p.constants["E"].value)
-        active = gap < 0 if state is None else state[0]
+        active = gap <= self.touching if state is None else state[0]
         f_n = kappa * max(-gap, 0.0) if state is None else kappa * (-gap) * active
         force = f_n * normal
         f_t = 0.0
@@ -153,7 +161,7 @@ class RigidCorners(Effect):
             force, s, gap, state, f_t = self._force(k, corners[k], xa, xb, xc)
             if not state[0]:
                 continue
-            self.active[k] = True
+            self.active[k] = gap < 0  # pressing (a touching corner adds only its stiffness)
             self.tangential[k] = f_t
             dofs = np.array([2 * a, 2 * a + 1, 2 * b, 2 * b + 1], dtype=np.int32)
             entries = np.r_[(1 - s) * force, s * force]

@@ -83,3 +83,22 @@ def test_stresses_stay_below_yield(cases, depth):
     l_d = 4 peaks at 238 MPa and l_d = 3 at 282 MPa (5, 6: 194, 178), see docs/wedging.md."""
     assert cases[depth]["max_von_mises"] < YIELD
     assert not cases[depth]["yielded"]
+
+
+def test_a_placed_corner_touches_with_stiffness_and_no_force():
+    """Two-point placement puts the peg's lower corner on the block wall to round-off (the gap
+    came out 3.6e-15 mm on the default mesh, 0 on the coarse one): it must enter Newton's first
+    Jacobian with the penalty stiffness gamma E, else the peg turns into the wall unopposed in
+    the first iteration; its force stays zero until it presses."""
+    from femcontact.solver.stepping import Simulation
+    from mpi4py import MPI
+
+    scene = load_scene(SCENE)
+    corners = next(c for c in Simulation(scene, MPI.COMM_WORLD).problem.components if c.name == "rigid_corners")
+    contributions, pressing = corners.contributions(with_jacobian=True)
+    touching = MPI.COMM_WORLD.allreduce(len(contributions), op=MPI.SUM)
+    assert touching == 1 and pressing == 0
+    kappa = float(corners.problem.constants["gamma"].value * corners.problem.constants["E"].value)
+    for _, entries, dC_du, _ in contributions:
+        assert np.abs(entries).max() == 0.0
+        assert np.abs(dC_du).max() == pytest.approx(kappa, rel=0.1)
