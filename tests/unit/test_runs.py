@@ -91,3 +91,18 @@ def test_the_command_ends_without_teardown_but_with_its_output_and_status():
     assert result.returncode == 3
     assert result.stdout.startswith("written") and "PETSc Performance Summary" in result.stdout
     assert result.stderr.startswith("error")
+
+
+def test_versions_are_read_without_pkg_resources_until_more_is_asked():
+    """femcontact.process.VersionsOnly: UFL's and FFCx's version strings as importlib.metadata
+    reads them, without importing pkg_resources; anything else loads the real module, once."""
+    code = ("import sys, importlib.metadata as m; from femcontact.process import start_mpi_for_meshing; "
+            "start_mpi_for_meshing(); import ufl, ffcx; stand_in = sys.modules['pkg_resources']; "
+            "print(ufl.__version__ == m.version('fenics-ufl'), ffcx.__version__ == m.version('fenics-ffcx'), "
+            "type(stand_in).__name__); working_set = stand_in.working_set; real = sys.modules['pkg_resources']; "
+            "print(type(real).__name__, real is not stand_in, stand_in.working_set is working_set, "
+            "sys.modules['pkg_resources'] is real)")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["True", "True", "VersionsOnly", "module", "True", "True", "True"]
