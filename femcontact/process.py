@@ -1,7 +1,7 @@
 """A femcontact process's start and end: MPI started for meshing, Open MPI's singleton defaults,
 no scan of the installed distributions for two version strings, the compiler's logging kept
-quiet, and the end without the interpreter's teardown. Used by the
-command line, the study's warm workers and the scenario programs (make bench, accuracy, stability).
+quiet, and the end without the interpreter's teardown. Used by the command line, the study's
+warm workers and the scenario programs (make bench, accuracy, stability).
 """
 import ctypes
 import importlib
@@ -37,9 +37,10 @@ own settings of these variables win."""
 class VersionsOnly(types.ModuleType):
     """Stands in for setuptools' `pkg_resources` while only versions are asked of it. UFL 2022.2
     and FFCx 0.5 import it just for `get_distribution(name).version`, and importing it scans
-    every installed distribution: a `femcontact hertz` process (1,904 dofs) took 0.70-0.72 s with
-    it and 0.62-0.64 s with this stand-in (medians of 5 processes, two measurements). Anything else asked of it (setuptools compiling a
-    form does) loads the real module in its place."""
+    every installed distribution: a `femcontact hertz` process (1,904 dofs) took 0.70-0.72 s
+    with it and 0.62-0.64 s with this stand-in (medians of 5 processes, two measurements).
+    Anything else asked of it (setuptools compiling a form does) loads the real module in its
+    place."""
 
     def get_distribution(self, name: str):
         return types.SimpleNamespace(project_name=name, version=importlib.metadata.version(name))
@@ -79,9 +80,9 @@ def end_process(code: int) -> None:
 
     Python frees every module's objects one by one at exit: with DOLFINx, UFL and PETSc loaded,
     ending `femcontact hertz` after it had printed its result took 0.13 s that way and 0.02 s
-    this way (medians of 5 runs). What a normal exit does that matters is done first: logging's handlers and
-    Python's and C's standard streams flushed, PETSc and MPI finalised (under mpirun a rank that
-    skips MPI_Finalize is reported as failed)."""
+    this way (medians of 5 runs). What a normal exit does that matters is done first: logging's
+    handlers and Python's and C's standard streams flushed, PETSc and MPI finalised (under
+    mpirun a rank that skips MPI_Finalize is reported as failed)."""
     logging.shutdown()
     for stream in (sys.stdout, sys.stderr):
         try:

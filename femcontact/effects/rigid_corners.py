@@ -57,8 +57,7 @@ class RigidCorners(Effect):
         self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
         self.active_count = 0
         self.search = 4 * p.model.h_contact
-        extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
-        self.touching = TOUCHING * extent  # mm
+        self.touching = TOUCHING * p.extent  # mm
         n = len(self.points)
         self.tangential_old = np.zeros(n)
         self.tangential = np.zeros(n)

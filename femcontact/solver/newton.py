@@ -67,7 +67,6 @@ class SchurNewton:
         self.work = [p.u.vector.copy() for _ in range(2 * n_r)]
         self.n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
-        self.extent = p.mesh.comm.allreduce(float(np.abs(self.coordinates).max(initial=0.0)), op=MPI.MAX)
         self.bc_dofs = p.support_dof_set
         self.linear = linear_solver(p, prefix, self._near_nullspace)
         self.stabilization = np.zeros((n_r, n_r))  # viscous spring to the last converged pose (N/mm, N*mm)
@@ -122,7 +121,8 @@ class SchurNewton:
 
     def current_residual(self, load):
         """`assemble_residual` at the current state, reusing the last assembly when it was
-        made there (the converged state of an increment, for the outputs)."""
+        made there (the converged state of an increment, for the outputs; the line search's
+        last trial where it stops)."""
         p = self.problem
         if self._assembled is not None:
             at, u, r, residual = self._assembled
@@ -141,7 +141,7 @@ class SchurNewton:
         stiffness gamma E / h_contact. It exceeds atol on fine contact meshes (Hertz at
         h_c = a/64.5: 3.8e-6 N; the residual stagnated at 1.6e-6 N for two iterations)."""
         c = self.problem.constants
-        return np.finfo(float).eps * self.extent * float(c["gamma"].value * c["E"].value) / self.problem.model.h_contact
+        return np.finfo(float).eps * self.problem.extent * float(c["gamma"].value * c["E"].value) / self.problem.model.h_contact
 
     def stabilize(self, factor: float) -> None:
         """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm; rotations
@@ -362,10 +362,8 @@ class SchurNewton:
                 else:
                     a_hi, g_hi = alpha, g
             if a_lo > 0:
-                if a == a_lo:  # the last trial stands there, assembled
-                    return trial
                 self._update(u0, r0, du, dr, a_lo)
-                return self.assemble_residual(load)
+                return self.current_residual(load)
         best = (trial_norm if np.isfinite(trial_norm) else np.inf, 1.0)
         rejected = (1.0, full)
         for alpha in [2.0 ** -k for k in range(1, 13)]:
@@ -376,10 +374,8 @@ class SchurNewton:
                 return self._into_switch(load, u0, r0, du, dr, (alpha, trial), rejected)
             rejected = (alpha, trial)
             best = min(best, (trial_norm if np.isfinite(trial_norm) else np.inf, alpha))
-        if best[1] == alpha:  # the last trial is the best, assembled
-            return trial
         self._update(u0, r0, du, dr, best[1])
-        return self.assemble_residual(load)
+        return self.current_residual(load)
 
     def _into_switch(self, load, u0, r0, du, dr, accepted, rejected):
         """From the halving's accepted (alpha_lo, R_lo) and the rejected (alpha_hi, R_hi) just above
@@ -404,8 +400,9 @@ class SchurNewton:
         if not h_lo < 0 < h_hi:
             jump_u.destroy()
             return R_lo
-        best = (self.norm(*R_lo[:2]), a_lo, R_lo)
-        trial, replaced = R_lo, None  # the end replaced last ("lo", "hi"): Illinois halves the other's h
+        norm_lo = self.norm(*R_lo[:2])
+        best = (norm_lo, a_lo)
+        replaced = None  # the end replaced last ("lo", "hi"): Illinois halves the other's h
         for _ in range(SWITCH_EVALUATIONS):
             alpha = a_lo + (a_hi - a_lo) * h_lo / (h_lo - h_hi)
             if not a_lo < alpha < a_hi:
@@ -416,8 +413,8 @@ class SchurNewton:
             if not np.isfinite(norm):
                 break
             if norm < best[0]:
-                best = (norm, alpha, trial)
-            if norm <= 0.5 * self.norm(*R_lo[:2]):
+                best = (norm, alpha)
+            if norm <= 0.5 * norm_lo:
                 break
             if value < 0:
                 h_hi *= 0.5 if replaced == "lo" else 1.0
@@ -426,10 +423,8 @@ class SchurNewton:
                 h_lo *= 0.5 if replaced == "hi" else 1.0
                 a_hi, h_hi, replaced = alpha, value, "hi"
         jump_u.destroy()
-        if best[2] is trial:
-            return trial
         self._update(u0, r0, du, dr, best[1])
-        return self.assemble_residual(load)
+        return self.current_residual(load)
 
     def curved_step(self, load, u0, r0, du, dr, residual, norm):
         """Follow the residual's curvature along the Newton direction d (geodesic acceleration):

@@ -15,6 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 
 from femcontact.effects import components_for
 from femcontact.errors import InputError
@@ -149,6 +150,13 @@ class Problem:
     def support_dof_set(self) -> set:
         """Local (unrolled) indices of all supported dofs."""
         return {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
+
+    @functools.cached_property
+    def extent(self) -> float:
+        """The largest |coordinate| of any dof node, over all ranks (mm): the scale of the
+        round-off in positions."""
+        local = float(np.abs(self.V.tabulate_dof_coordinates()).max(initial=0.0))
+        return self.mesh.comm.allreduce(local, op=MPI.MAX)
 
     def local_coordinates(self) -> np.ndarray:
         """Current position of every dof node in the rigid body's shape frame (numpy, mm)."""
