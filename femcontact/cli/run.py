@@ -7,11 +7,14 @@ thing, `result.json`:
 A metric that is undefined (NaN or infinite) is written as null and listed in
 `info.undefined_metrics`. Progress goes to standard error (`--quiet` silences it and the summary).
 Exit code 0 when ok, 1 when the simulation failed (reason recorded), 2 for bad input or an
-output directory that cannot be written (one message naming it).
+output directory that cannot be written (one message naming it); input found bad only once the
+model is built (a `steps[].stop.column` that names no history column) is refused the same way,
+before the first increment, and leaves no case directory behind.
 """
 import json
 import math
 import os
+import shutil
 import sys
 import time
 import traceback
@@ -72,7 +75,7 @@ def command(args) -> int:
         remove_stale_compilations(cache, older_than=STALE_COMPILATION_AGE)
         _CLEANED_CACHES.add(cache)
     case_dir = Path(args.out or Path("results", "run", case_id(scene)))
-    problem = None
+    problem, created = None, not case_dir.exists()
     if comm.rank == 0:
         try:
             make_dir(case_dir)
@@ -87,6 +90,10 @@ def command(args) -> int:
     try:
         result = {"status": "ok", "reason": None,
                   **run_case(scene, case_dir, args.checkpoint, args.restart, quiet=args.quiet)}
+    except InputError as error:  # found once the model is built (a history column): refused, nothing left
+        if comm.rank == 0:
+            withdraw(case_dir, created)
+        raise InputError(f"{args.scene}: {error}") from None
     except Exception as error:  # recorded, never a half-written result
         from femcontact.solver.stepping import SimulationFailed
 
@@ -106,6 +113,15 @@ def command(args) -> int:
         if not args.quiet:
             print_summary(result, case_dir)
     return 0 if result["status"] == "ok" else 1
+
+
+def withdraw(case_dir: Path, created: bool) -> None:
+    """Remove what a refused run wrote: the case directory if it made it, else its files."""
+    if created:
+        shutil.rmtree(case_dir, ignore_errors=True)
+        return
+    for name in ("scene.json", "history.csv"):
+        (case_dir / name).unlink(missing_ok=True)
 
 
 def jit_cache() -> Path:

@@ -125,10 +125,15 @@ CONTACT = {
                    choices=(-1.0, 0.0, 1.0)),
 }
 
+MAX_INCREMENTS = 100_000
+"""Increments of all steps of a scene together (each a Newton solve and a row of history.csv)."""
+
 STEP = {
     "name": Field("str", "step", "step name"),
     "duration": Field("float", 1.0, "step duration (s)", positive=True),
-    "increments": Field("int", 10, "number of increments", min=1),
+    "increments": Field("int", 10, f"number of increments (all steps together at most {MAX_INCREMENTS}); a "
+                        "dislodging scene's pull and observe steps take theirs from `dislodging.dt_max`",
+                        min=1),
     "force": Field("floats", [], "force on the rigid body at `load_point` at the end of the step (N), [Fx, Fy(, Fz)]"),
     "moment": Field("floats", [], "moment on the rigid body (N*mm): Mz in 2-D, [Mx, My, Mz] in 3-D"),
     "load_point": Field("str", "peg_top", "named point where the force acts (e.g. peg_top, contact_A, peg_tip)"),
@@ -172,7 +177,11 @@ SUPPORT = {
 }
 
 SOLVER = {
-    "max_iterations": Field("int", 40, "Newton iterations per increment", min=1),
+    "max_iterations": Field("int", 40, "Newton iterations per solve. An increment whose plain solve fails is "
+                            "solved again along the contact stabilisation's continuation, up to one solve per "
+                            "stabilisation level, each within this limit: history.csv's newton_iterations is the "
+                            "sum over the solves that led to the converged increment, so it can exceed this value",
+                            min=1),
     "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
     "atol": Field("float", 1e-6, "absolute residual tolerance (N); the round-off floor of the contact "
                   "residual is about eps * |x| * gamma E / h, 1e-8 to 3e-7 N for the default wedging mesh",
@@ -283,8 +292,18 @@ def _check_contact(scene: dict) -> None:
     if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
         problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
                         "set geometry = 'peg_in_hole' and rigid = 'peg'")
+    total = sum(step["increments"] for step in scene["steps"])
+    if total > MAX_INCREMENTS:
+        counts = ", ".join(f"steps[{i}].increments = {step['increments']}" for i, step in enumerate(scene["steps"])
+                           if step["increments"] > MAX_INCREMENTS // 10)
+        problems.append(f"{counts}: {total} increments in all, at most {MAX_INCREMENTS} (each a Newton solve and "
+                        "a row of history.csv)")
     if problems:
         raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
+    if "compliant_support" in effects:
+        from femcontact.effects.compliant_support import stiffness_matrix
+
+        stiffness_matrix(scene)  # 'matrix': its size, symmetry and positive definiteness
     if scene["geometry"] == "peg_in_hole":
         from geometry.placement import check_peg_in_hole
 

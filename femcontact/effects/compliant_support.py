@@ -40,10 +40,15 @@ def stiffness_matrix(scene: dict) -> np.ndarray:
     if model == "matrix":
         values = support["stiffness"]
         if len(values) != n * n:
-            raise InputError(f"support.stiffness: {len(values)} values, expected {n * n} ({n}x{n}, row by row)")
+            raise InputError(f"support.stiffness = {values}: {len(values)} values, expected {n * n} ({n}x{n}, "
+                             "row by row) for support.model = 'matrix'")
         K = np.array(values).reshape(n, n)
         if not np.allclose(K, K.T, rtol=1e-12, atol=0.0):
             raise InputError("support.stiffness: the matrix must be symmetric (a spring system)")
+        smallest = np.linalg.eigvalsh(K).min()
+        if not smallest > 0:
+            raise InputError(f"support.stiffness = {values}: not positive definite (smallest eigenvalue "
+                             f"{smallest:.3g}); a support must resist every motion of the peg")
         return K
     from femcontact.rcc.device import Rcc, formula_stiffness
 

@@ -11,6 +11,7 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
+from femcontact.errors import InputError
 
 
 class Recorder:
@@ -47,6 +48,25 @@ class Recorder:
             self.zones = {"A": on_contact & (x[:, 0] < 0), "B": on_contact & (x[:, 0] >= 0)}
         else:
             self.zones = {"top": on_contact}
+        self.columns = self._columns()
+        check_stop_columns(p.scene, self.columns)
+
+    def _columns(self) -> list[str]:
+        """The names of a row's values, in order (history.csv's header)."""
+        p, dim = self.problem, self.problem.dim
+        axes, moments = "xyz"[:dim], (["z"] if dim == 2 else list("xyz"))
+        columns = ["step", "time", "dt", "newton_iterations", *(f"rigid_{name}" for name in p.rigid.names),
+                   "tilt_deg", *(f"applied_F{axis}" for axis in axes)]
+        for name in p.support_dofs:
+            columns += [*(f"reaction_{name}_{axis}" for axis in axes), f"reaction_{name}",
+                        *(f"reaction_{name}_M{axis}" for axis in moments)]
+        for zone in self.zones:
+            columns += [*(name for axis in axes for name in (f"contact_{zone}_F{axis}", f"contact_{zone}_{axis}")),
+                        f"contact_{zone}_force"]
+        columns += ["max_pressure", *(f"{state}_nodes" for state in self.states)]
+        for component in p.components:
+            columns += list(component.outputs())
+        return columns + ["elastic_energy", "max_von_mises", "yielded", "stabilization_force"]
 
     def _sum(self, value):
         return self.comm.allreduce(value, op=MPI.SUM)
@@ -74,7 +94,9 @@ class Recorder:
         out["on_surface"] = where
         return out
 
-    def row(self, load, iterations: int) -> dict:
+    def row(self, load, iterations: int, stabilization_force: float = 0.0) -> dict:
+        """The outputs after a converged increment; `stabilization_force` (N): the contact
+        stabilisation's force kept in it (0 for an exact solve)."""
         p, newton = self.problem, self.newton
         dim, rigid = p.dim, p.rigid
         row = {"step": p.scene["steps"][load.step]["name"], "time": load.time, "dt": load.dt,
@@ -122,5 +144,15 @@ class Recorder:
         n = self.W.dofmap.index_map.size_local
         row["max_von_mises"] = self._max(float(self.von_mises.x.array[:n].max(initial=0.0)))
         row["yielded"] = bool(row["max_von_mises"] > p.scene["materials"][p.deformable]["yield_stress"])
+        row["stabilization_force"] = stabilization_force
         return row
+
+
+def check_stop_columns(scene: dict, columns: list[str]) -> None:
+    """Refuse a `steps[].stop.column` that names no history column (InputError listing them)."""
+    for i, step in enumerate(scene["steps"]):
+        column = step["stop"]["column"]
+        if column and column not in columns:
+            raise InputError(f"steps[{i}].stop.column = {column!r}: no such history column, expected one of "
+                             + ", ".join(columns))
 

@@ -201,7 +201,7 @@ def stuck_increment(simulation, index: int, step: dict) -> bool:
         return False
     finally:
         mu.value = real
-    row = {**simulation.recorder.row(load, iterations), "stabilization_force": 0.0}
+    row = simulation.recorder.row(load, iterations)
     f = forces(simulation.scene, [row])
     if not (f["normal"][0] > 0 and abs(f["tangential"][0]) < (1 - STICK_MARGIN) * real * f["normal"][0]):
         p.restore(state)

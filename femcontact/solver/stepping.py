@@ -165,7 +165,7 @@ class Simulation:
         finally:
             self.timings["solve"] += time.perf_counter() - start
         start = time.perf_counter()
-        row = {**self.recorder.row(load, iterations), "stabilization_force": self.stabilization_force}
+        row = self.recorder.row(load, iterations, self.stabilization_force)
         self.timings["output"] += time.perf_counter() - start
         p.commit(load.dt)
         self.last_change = (load.step, load.dt, p.u.x.array - state["u"])

@@ -103,6 +103,10 @@ RUN_CASES = [
     (["solver.petsc_options={kps_type='cg'}"], ["solver.petsc_options.kps_type: not a linear-solver option"]),
     (["solver.petsc_options={ksp_rtol=nan}"], ["solver.petsc_options.ksp_rtol = nan: not a finite number"]),
     (["solver.petsc_options=3"], ["solver.petsc_options = 3: must be a table"]),
+    # limits: a day of solves and gigabytes of history are refused, not started
+    (["steps.0.increments=10000000"], ["steps[0].increments = 10000000", "10000005 increments in all, at most 100000"]),
+    (["steps.0.increments=60000", "steps.1.increments=60000"],
+     ["steps[0].increments = 60000, steps[1].increments = 60000: 120000 increments in all"]),
 ]
 
 
@@ -111,6 +115,49 @@ def test_run_refuses_bad_scene_values(tmp_path, capsys, assignments, fragments):
     out = tmp_path / "out"
     code, err = cli(capsys, "run", WEDGING, *sets(*assignments), "--out", out)
     assert_refused(code, err, "wedging_2d.toml", *fragments)
+    assert not out.exists()
+
+
+INSERTION = str(SCENES / "insertion_2d.toml")
+DISLODGING = str(SCENES / "dislodging_2d.toml")
+
+
+@pytest.mark.parametrize("scene, assignments, fragment", [
+    (INSERTION, ["support.model='matrix'"], "support.stiffness = []: 0 values, expected 9 (3x3, row by row)"),
+    (INSERTION, ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"], "support.stiffness = [1.0, 2.0]: 2 values"),
+    (INSERTION, ["support.model='matrix'", "support.stiffness=[-1, 0, 0, 0, -1, 0, 0, 0, -1]"],
+     "not positive definite (smallest eigenvalue -1)"),
+    (INSERTION, ["support.model='matrix'", "support.stiffness=[10, 20, 0, 20, 10, 0, 0, 0, 1]"],
+     "not positive definite (smallest eigenvalue -10)"),  # positive diagonal, eigenvalues 30, -10, 1
+    (INSERTION, ["support.model='matrix'", "support.stiffness=[10, 1, 0, 0, 10, 0, 0, 0, 1]"], "must be symmetric"),
+    (DISLODGING, ["steps.2.increments=10000000"], "steps[2].increments = 10000000: 10000215 increments in all"),
+], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
+        "asymmetric stiffness", "dislodging increments"])
+def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, scene, assignments, fragment):
+    out = tmp_path / "out"
+    assert_refused(*cli(capsys, "run", scene, *sets(*assignments), "--out", out), Path(scene).name, fragment)
+    assert not out.exists()
+
+
+def test_a_positive_definite_support_matrix_is_the_springs_it_spells(tmp_path):
+    """The 'matrix' model with the springs' diagonal is the springs' support (the same K)."""
+    from femcontact.config.scene import load_scene
+    from femcontact.effects.compliant_support import stiffness_matrix
+
+    springs = load_scene(INSERTION)
+    matrix = load_scene(INSERTION, ["support.model='matrix'", "support.stiffness=[20, 0, 0, 0, 1e5, 0, 0, 0, 3000]"])
+    assert np.array_equal(stiffness_matrix(matrix), stiffness_matrix(springs))
+
+
+def test_a_stop_column_that_names_no_history_column_is_refused_before_solving(tmp_path, capsys):
+    """Known once the model is built: refused then, in one line listing the columns, before the
+    first increment, and the case directory it made is removed."""
+    out = tmp_path / "out"
+    code, err = cli(capsys, "run", INSERTION, *sets("mesh.resolution=0.5", "steps.0.stop.column='support_Fyy'"),
+                    "--out", out, "--quiet")
+    assert_refused(code, err, "insertion_2d.toml: steps[0].stop.column = 'support_Fyy': no such history column",
+                   "support_Fy, ")
+    assert len(err.strip().splitlines()) == 1
     assert not out.exists()
 
 

@@ -106,3 +106,22 @@ def test_versions_are_read_without_pkg_resources_until_more_is_asked():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["True", "True", "VersionsOnly", "module", "True", "True", "True"]
+
+
+def test_a_stop_column_ends_the_run_and_the_columns_are_the_history_header(tmp_path):
+    """The columns a stop may name (checked before solving) are exactly history.csv's header,
+    and a stop on one of them ends the run at the first increment past its value."""
+    out = tmp_path / "case"
+    scene = ROOT / "scenes" / "insertion_2d.toml"
+    overrides = ["mesh.resolution=0.5", "steps.0.increments=10", "steps.0.stop.value=0.05"]
+    code = subprocess.run([sys.executable, "-m", "femcontact", "run", str(scene), *sum((["--set", o] for o in overrides), []),
+                           "--out", str(out), "--quiet"], cwd=ROOT).returncode
+    assert code == 0
+    with open(out / "history.csv") as file:
+        rows = list(csv.DictReader(file))
+    from femcontact.solver.stepping import Simulation
+
+    columns = Simulation(load_scene(scene, overrides)).recorder.columns
+    assert list(rows[0]) == columns
+    assert 0 < len(rows) < 10 and abs(float(rows[-1]["support_Fy"])) > 0.05
+    assert all(abs(float(row["support_Fy"])) <= 0.05 for row in rows[:-1])
