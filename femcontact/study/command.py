@@ -3,6 +3,7 @@ runner.py) or as a SLURM job array (`--scheduler slurm`, slurm.py); `--list` and
 where the cases are. See docs/studies.md and docs/slurm.md.
 """
 import fcntl
+import json
 import os
 import signal
 import sys
@@ -12,8 +13,13 @@ from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir
 from femcontact.study import slurm
 from femcontact.study.database import Database
-from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, load_study,
-                                     read_result)
+from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, iter_cases,
+                                     load_study, make_cases, read_result)
+
+MAX_CASES = 10_000
+"""Cases a study may have unless --max-cases says more: each is at least a process start and a solve."""
+ANNOUNCED_CASES = 1000
+"""From this many cases on, the count is stated before they are checked (about a second per 1000)."""
 
 
 def add_arguments(parser):
@@ -26,7 +32,10 @@ def add_arguments(parser):
     parser.add_argument("--force", action="store_true", help="rerun every case")
     parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary")
     parser.add_argument("--results", default="results", help="results root (default: results)")
-    parser.add_argument("--list", action="store_true", help="list the cases and their state, run nothing")
+    parser.add_argument("--max-cases", type=int, default=MAX_CASES, metavar="N",
+                        help=f"refuse a sweep of more than N cases (default {MAX_CASES}); --list has no limit")
+    parser.add_argument("--list", action="store_true",
+                        help="list the cases and their state as they are made, run nothing")
     parser.add_argument("--status", action="store_true",
                         help="a line per case (ok, failed, running, queued, missing) and the counts; "
                              "rebuilds the database and CSV; runs nothing")
@@ -50,7 +59,10 @@ def command(args) -> int:
         raise InputError(f"--ranks-per-case {args.ranks_per_case}: expected >= 1")
     if args.launcher is not None and _check_launcher(args.launcher):
         raise InputError(f"--launcher {args.launcher!r}: {_check_launcher(args.launcher)}")
-    study = load_study(args.study, args.set, args.results)
+    if args.max_cases < 1:
+        raise InputError(f"--max-cases {args.max_cases}: expected >= 1")
+    study = load_study(args.study, args.set, args.results, max_cases=None if args.list else args.max_cases,
+                       resolve_cases=False)
     settings = study.settings
     ranks = args.ranks_per_case if args.ranks_per_case is not None else settings["ranks_per_case"]
     jobs = args.jobs if args.jobs is not None else settings["jobs"]
@@ -58,19 +70,28 @@ def command(args) -> int:
         settings["launcher"] = args.launcher
     if args.list:  # reads the case directories only: works on a read-only results directory
         return _list(study)
+    if not args.quiet and study.count >= ANNOUNCED_CASES:
+        print(f"study {settings['name']}: {study.count} cases in the sweep; checking them", file=sys.stderr, flush=True)
+    make_cases(study)
     if args.status:
         return _status(study)
     max_concurrent = args.max_concurrent if args.max_concurrent is not None else jobs  # SLURM: 0 = no limit
     jobs = jobs or max(1, len(os.sched_getaffinity(0)) // ranks)
     make_dir(study.results)
     try:
-        lock = open(study.results / ".lock", "w")
+        lock = open(study.results / ".lock", "a+")  # not "w": the running study's entry must stay
     except OSError as error:
         raise WriteError(describe(error, study.results / ".lock")) from None
     try:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         raise InputError(f"{study.results}: another `femcontact study` is running this study") from None
+    try:  # who runs the study since when: --status tells its running cases from those still queued
+        lock.truncate(0)
+        lock.write(json.dumps({"pid": os.getpid(), "started": time.time()}))
+        lock.flush()
+    except OSError as error:
+        raise WriteError(describe(error, study.results / ".lock")) from None
 
     database = Database(study.database, study.keys)
     try:
@@ -118,6 +139,24 @@ def _run(study: Study, args, database, jobs: int, ranks: int, max_concurrent: in
     return _summary(study, progress.start)
 
 
+def local_run(study: Study) -> dict | None:
+    """The `femcontact study` running this study here ({'pid', 'started'}), or None."""
+    try:
+        lock = open(study.results / ".lock")
+    except OSError:
+        return None
+    with lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            return None  # nobody holds it
+        except BlockingIOError:
+            pass
+        try:
+            return json.loads(lock.read())
+        except json.JSONDecodeError:  # held by a runner that has not written its entry yet
+            return {"pid": None, "started": time.time()}
+
+
 def _status(study: Study) -> int:
     make_dir(study.results)
     database = Database(study.database, study.keys)
@@ -126,7 +165,7 @@ def _status(study: Study) -> int:
         database.export_csv(study.results / "results.csv")
     finally:
         database.close()
-    slurm.status(study)
+    slurm.status(study, local=local_run(study))
     return 0
 
 
@@ -150,7 +189,10 @@ def _raise_interrupt(signum, frame):
 
 
 def _list(study: Study) -> int:
-    for case in study.cases:
+    """A line per case as it is made (a large sweep starts printing at once and is never held in memory)."""
+    if study.count >= ANNOUNCED_CASES:
+        print(f"study {study.settings['name']}: {study.count} cases in the sweep", file=sys.stderr, flush=True)
+    for case in iter_cases(study):
         result = read_result(case.dir)
         print(f"{case.id}  {result['status'] if result else 'todo':6s}  {_describe(case.params)}")
     return 0

@@ -21,7 +21,9 @@ import fcntl
 import functools
 import itertools
 import json
+import math
 import os
+import re
 import select
 import shlex
 import signal
@@ -30,6 +32,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterator
 
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
@@ -171,6 +174,9 @@ class Study:
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
+    base: dict = field(default_factory=dict)  # the base scene with the study's and --set values, unresolved
+    sweep: dict = field(default_factory=dict)
+    count: int = 0  # parameter sets of the sweep (cases before duplicates are merged)
 
     @property
     def database(self) -> Path:
@@ -190,21 +196,42 @@ def get_key(scene: dict, dotted: str):
     return node
 
 
-def expand(sweep: dict) -> list[dict]:
-    """Parameter sets of a sweep: grid (product) x zip (together), then the explicit cases.
-
-    An empty sweep is the base scene alone."""
+def expand(sweep: dict) -> Iterator[dict]:
+    """Parameter sets of a sweep, one at a time: grid (product) x zip (together), then the
+    explicit cases. An empty sweep is the base scene alone."""
     grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
     explicit = [flatten(case) for case in sweep.get("cases", [])]
     if not grid and not zipped:
-        return explicit or [{}]
-    grid_sets = [dict(zip(grid, values)) for values in itertools.product(*grid.values())]
+        yield from explicit or [{}]
+        return
     zip_sets = [dict(zip(zipped, values)) for values in zip(*zipped.values())] or [{}]
-    return [{**g, **z} for g in grid_sets for z in zip_sets] + explicit
+    for values in itertools.product(*grid.values()):
+        for z in zip_sets:
+            yield {**dict(zip(grid, values)), **z}
+    yield from explicit
 
 
-def load_study(path, overrides=(), results_root="results") -> Study:
-    """Read and validate a study file and resolve every case; raises InputError naming bad cases."""
+def count_cases(sweep: dict) -> int:
+    """How many parameter sets `expand(sweep)` yields, without making them."""
+    grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
+    explicit = len(sweep.get("cases", []))
+    if not grid and not zipped:
+        return explicit or 1
+    return math.prod(len(values) for values in grid.values()) * \
+        (len(next(iter(zipped.values()))) if zipped else 1) + explicit
+
+
+def swept_keys(sweep: dict) -> list[str]:
+    """The dotted scene keys a sweep sets, in the order of its parameter sets."""
+    explicit = [key for case in sweep.get("cases", []) for key in flatten(case)]
+    return list(dict.fromkeys([*flatten(sweep.get("grid", {})), *flatten(sweep.get("zip", {})), *explicit]))
+
+
+def load_study(path, overrides=(), results_root="results", max_cases=None, resolve_cases=True) -> Study:
+    """Read and validate a study file and resolve every case; raises InputError naming bad cases.
+
+    A sweep of more than `max_cases` cases (None: no limit) is refused before any is made. With
+    `resolve_cases` false the cases are left to `iter_cases` (one at a time, e.g. for --list)."""
     path = Path(path)
     try:
         raw = validate(read_toml(path), SCHEMA)
@@ -216,32 +243,77 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         set_key(base, key, value)
     for text in overrides:  # --set changes the base scene; the sweep still varies its own keys
         set_key(base, *parse_assignment(text))
+    count = count_cases(raw["sweep"])
+    if max_cases is not None and count > max_cases:
+        raise InputError(f"{path}: the sweep makes {count} cases, more than the limit of {max_cases}; nothing was "
+                         f"run (pass --max-cases {count} to run them all, or --list to see them)")
     results = Path(results_root) / settings["name"]
-    cases, problems, seen = [], [], set()
-    for params in expand(raw["sweep"]):
-        data = json.loads(json.dumps(base))
+    study = Study(path, settings, [], swept_keys(raw["sweep"]), results, raw["plot"], raw["snapshots"],
+                  raw["report"], base=base, sweep=raw["sweep"], count=count)
+    _check_scene_once(study)
+    if resolve_cases:
+        make_cases(study)
+    return study
+
+
+def make_cases(study: Study) -> None:
+    """Resolve every case of the study into `study.cases`, with their shared prefixes."""
+    study.cases = list(iter_cases(study))
+    if study.settings["shared_steps"]:
+        attach_prefixes(study.cases, study.settings["shared_steps"], study.results)
+
+
+def _check_scene_once(study: Study) -> None:
+    """Refuse in one line a base scene that is invalid whatever the sweep sets: its error names
+    no swept key and the first case fails with the same error."""
+    try:
+        resolve(study.base)
+        return
+    except InputError as error:
+        message = str(error)
+    forms = {form for key in study.keys for form in (key, re.sub(r"\.(\d+)", r"[\1]", key))}
+    if any(form in message for form in forms):
+        return  # the sweep may mend it; each case says
+    try:
+        resolve(_case_data(study.base, next(expand(study.sweep))))
+    except InputError as error:
+        if str(error) == message:
+            raise InputError(f"{study.path}: {study.count} invalid case(s), nothing was run: {message} (the scene "
+                             f"{study.settings['scene']} with the study's values, whatever the sweep sets)") from None
+
+
+def _case_data(base: dict, params: dict) -> dict:
+    data = json.loads(json.dumps(base))
+    for key, value in params.items():
+        set_key(data, key, value)
+    return data
+
+
+def iter_cases(study: Study) -> Iterator[Case]:
+    """The study's distinct cases in sweep order, resolved one at a time; once all are made,
+    raises InputError listing the invalid ones, grouped by error."""
+    problems, seen = {}, set()
+    for params in expand(study.sweep):
         try:
-            for key, value in params.items():
-                set_key(data, key, value)
-            scene = resolve(data)
+            scene = resolve(_case_data(study.base, params))
         except InputError as error:
-            problems.append(f"case {_describe(params)}: {error}")
+            problems.setdefault(str(error), []).append(params)
             continue
         identity = case_id(scene)
         if identity not in seen:
             seen.add(identity)
-            cases.append(Case(params, scene, identity, results / "cases" / identity))
+            yield Case({key: get_key(scene, key) for key in study.keys}, scene, identity,
+                       study.results / "cases" / identity)
     if problems:
-        raise InputError(f"{path}: {len(problems)} invalid case(s), nothing was run:\n  " + "\n  ".join(problems))
-    keys = list(dict.fromkeys(key for case in cases for key in case.params))
-    for case in cases:
-        case.params = {key: get_key(case.scene, key) for key in keys}
-    if settings["shared_steps"]:
-        _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
+        invalid = sum(map(len, problems.values()))
+        lines = [f"case {_describe(cases[0])}: {message}" if len(cases) == 1 else
+                 f"{message} ({'every case' if len(cases) == study.count else f'{len(cases)} cases'}: "
+                 + "; ".join(_describe(params) for params in cases[:3]) + ("; ..." if len(cases) > 3 else "") + ")"
+                 for message, cases in problems.items()]
+        raise InputError(f"{study.path}: {invalid} invalid case(s), nothing was run:\n  " + "\n  ".join(lines))
 
 
-def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
+def attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
     """Give every case with more than `shared` steps the prefix case it restarts from."""
     prefixes = {}
     for case in cases:

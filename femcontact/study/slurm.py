@@ -225,10 +225,11 @@ def _submit_array(study: Study, kind: str, cases: list[Case], stamp: str, *, ran
 
 # -- status ---------------------------------------------------------------------------------------
 
-def status(study: Study, stream=None) -> dict:
+def status(study: Study, stream=None, local: dict | None = None) -> dict:
     """Print a line per case (id, state, parameters, SLURM task) and the counts; returns the counts.
 
-    States: ok, failed (a result), running / queued (a SLURM task of a recorded submission), missing."""
+    States: ok, failed (a result), running / queued (a SLURM task of a recorded submission, or with
+    `local`, the {'started': time} of a `femcontact study` running here: started by it / not yet), missing."""
     try:
         active = active_tasks(study) if read_submissions(study) else {}
     except InputError as error:
@@ -243,6 +244,8 @@ def status(study: Study, stream=None) -> dict:
             state = "ok" if result["status"] == "ok" else "failed"
         elif task:
             state = "running" if task["state"] in ("RUNNING", "COMPLETING", "CONFIGURING") else "queued"
+        elif local is not None:
+            state = "running" if _started(case.dir) >= local["started"] else "queued"
         else:
             state = "missing"
         counts[state] += 1
@@ -251,6 +254,14 @@ def status(study: Study, stream=None) -> dict:
     print(f"study {study.settings['name']}: {len(study.cases)} cases: {counts['ok']} done, {counts['failed']} failed, "
           f"{counts['running']} running, {counts['queued']} queued, {counts['missing']} missing", file=stream)
     return counts
+
+
+def _started(case_dir: Path) -> float:
+    """When the case's last run started (s since the epoch; 0 if never)."""
+    try:
+        return json.loads((case_dir / "runner.json").read_text()).get("started", 0.0)
+    except (OSError, json.JSONDecodeError):
+        return 0.0
 
 
 # -- one array task -------------------------------------------------------------------------------

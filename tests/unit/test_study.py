@@ -25,7 +25,7 @@ from femcontact.study.database import Database
 from femcontact.errors import InputError
 from femcontact.config.scene import case_id, resolve
 from femcontact.config.schema import set_key
-from femcontact.study.runner import expand, load_study, to_toml
+from femcontact.study.runner import count_cases, expand, load_study, to_toml
 from block_scene import BLOCK_SCENE
 
 HERE = Path(__file__).parent
@@ -104,17 +104,19 @@ def test_scene_toml_round_trip_keeps_the_case_id():
 def test_expand_grid_times_zip_plus_cases():
     sweep = {"grid": {"a": [1, 2], "b": {"c": [3, 4, 5]}}, "zip": {"x": [6, 7], "y": [8, 9]},
              "cases": [{"a": 0}]}
-    sets = expand(sweep)
+    sets = list(expand(sweep))
     assert len(sets) == 2 * 3 * 2 + 1
     assert sets[0] == {"a": 1, "b.c": 3, "x": 6, "y": 8} and sets[1] == {"a": 1, "b.c": 3, "x": 7, "y": 9}
     assert sets[-1] == {"a": 0}
-    assert expand({}) == [{}] and expand({"cases": [{"a": 1}]}) == [{"a": 1}]
+    assert list(expand({})) == [{}] and list(expand({"cases": [{"a": 1}]})) == [{"a": 1}]
+    assert count_cases(sweep) == 13 and count_cases({}) == 1 and count_cases({"cases": [{"a": 1}]}) == 1
 
 
 def test_study_validates_every_case_before_running(tmp_path, fake):
     path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, -1.0], "steps.1.force" = [[1.0, 2.0]] }\n'
                                 'zip = { "contact.gamma" = [1.0, 2.0], "mesh.degree" = [1, 2] }')
-    with pytest.raises(InputError, match=r"(?s)2 invalid case.*case contact.mu=-1.0, .*mesh.degree=2: contact.mu = -1.0: out of range"):
+    with pytest.raises(InputError, match=r"2 invalid case\(s\), nothing was run:\n  contact.mu = -1.0: out of range.* \(2 cases: "
+                       r"contact.mu=-1.0, .*mesh.degree=1; contact.mu=-1.0, .*mesh.degree=2\)$"):
         load_study(path, results_root=tmp_path / "results")
     path.write_text(path.read_text().replace("-1.0", "0.3"))
     study = load_study(path, ["contact.theta=1"], results_root=tmp_path / "results")
@@ -396,3 +398,75 @@ def test_offscreen_snapshot_prints_no_display_warning(tmp_path):
                           env=env, capture_output=True, text=True)
     assert done.returncode == 0 and (tmp_path / "s.png").exists(), done.stderr
     assert done.stderr == "" and done.stdout == ""
+
+
+# -- large sweeps, one error for all, --status of a local run ---------------------------------------
+
+def test_a_large_sweep_is_counted_first_refused_past_the_limit_and_made_lazily(tmp_path, capsys, fake,
+                                                                              monkeypatch):
+    keys = ("contact.mu", "contact.gamma", "materials.block.E", "materials.block.nu", "mesh.resolution")
+    grid = ", ".join(f'"{key}" = [{", ".join(f"{0.1 + i / 100:.2f}" for i in range(10))}]' for key in keys)
+    path = make_study(tmp_path, f"[sweep]\ngrid = {{ {grid} }}\n")
+    results = tmp_path / "results"
+    start = time.perf_counter()
+    code = main(["study", str(path), "--results", str(results)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert "the sweep makes 100000 cases, more than the limit of 10000; nothing was run (pass --max-cases 100000" in err
+    assert time.perf_counter() - start < 5  # refused before the cases are made (making them: ~1 min)
+    assert not results.exists() and fake() == {}
+    # the cases are made one at a time: the first arrive after as many resolutions, not 100000
+    import femcontact.study.runner as runner
+
+    resolved = []
+    monkeypatch.setattr(runner, "resolve", lambda data: resolved.append(1) or resolve(data))
+    study = load_study(path, results_root=results, resolve_cases=False)
+    assert study.count == 100000 and study.cases == []
+    cases = runner.iter_cases(study)
+    first = [next(cases) for _ in range(3)]
+    assert [case.params["mesh.resolution"] for case in first] == [0.1, 0.11, 0.12] and len(resolved) <= 5
+    monkeypatch.undo()
+    # a small sweep: --max-cases below its size refuses it, --list states the count, then the cases
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3] }\n')
+    assert main(["study", str(path), "--results", str(results), "--max-cases", "2"]) == 2
+    assert "makes 3 cases, more than the limit of 2" in capsys.readouterr().err
+    monkeypatch.setattr("femcontact.study.command.ANNOUNCED_CASES", 3)
+    assert main(["study", str(path), "--results", str(results), "--list"]) == 0
+    out, err = capsys.readouterr()
+    assert err == "study demo: 3 cases in the sweep\n" and len(out.splitlines()) == 3 and "contact.mu=0.3" in out
+
+
+def test_a_scene_invalid_whatever_the_sweep_sets_is_one_error(tmp_path, capsys, fake):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3], "contact.gamma" = [1.0, 2.0] }\n')
+    code = main(["study", str(path), "--results", str(tmp_path / "results"), "--set", "materials.block.E=-1"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert "6 invalid case(s), nothing was run: materials.block.E = -1: out of range, expected a number > 0 " \
+           "(the scene base.toml with the study's values, whatever the sweep sets)" in err
+    # an error the sweep causes is said once, with the cases it concerns
+    code = main(["study", str(path), "--results", str(tmp_path / "results"), "--set", "contact.theta=0.5"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("contact.theta = 0.5") == 1 and fake() == {}
+
+
+def test_status_during_a_local_run_shows_running_and_queued_cases(tmp_path, capsys, fake, monkeypatch):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3] }\n', settings="jobs = 1")
+    path.write_text(path.read_text().replace("jobs = 2\n", ""))
+    results = tmp_path / "results"
+    monkeypatch.setenv("FAKE_HANG_MU", "0.1")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    study = subprocess.Popen([sys.executable, "-m", "femcontact", "study", str(path), "--results", str(results),
+                              "--quiet"], env=env, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 60
+        while not fake() and time.monotonic() < deadline:  # the first case has started
+            time.sleep(0.05)
+        assert main(["study", str(path), "--results", str(results), "--status"]) == 0
+        out = capsys.readouterr().out
+        assert out.splitlines()[-1].endswith("3 cases: 0 done, 0 failed, 1 running, 2 queued, 0 missing"), out
+        assert re.search(r"running\s+contact.mu=0.1", out)
+    finally:
+        study.terminate()
+        study.communicate(timeout=30)
+    assert main(["study", str(path), "--results", str(results), "--status"]) == 0  # nobody runs it now
+    assert capsys.readouterr().out.splitlines()[-1].endswith("0 running, 0 queued, 3 missing")
