@@ -3,10 +3,13 @@
 The case directory holds the resolved scene (`scene.json`), `history.csv` (one row per
 converged increment, streamed), `fields.npz` and, written atomically as the very last
 thing, `result.json`:
-{"status": "ok"|"failed", "reason": str|null, "metrics": {...}, "timings": {...}, "info": {...}}.
+{"status": "ok"|"no_equilibrium"|"failed", "reason": str|null, "metrics": {...}, "timings": {...}, "info": {...}}.
+`no_equilibrium`: a load of a 2-D rigid peg in two-point contact that no static equilibrium can
+carry (it needs more friction than mu): the reason names the step, the load and the friction it
+needs; the metrics are those of the converged increments (a peg in a hole: not wedged).
 A metric that is undefined (NaN or infinite) is written as null and listed in
 `info.undefined_metrics`. Progress goes to standard error (`--quiet` silences it and the summary).
-Exit code 0 when ok, 1 when the simulation failed (reason recorded), 2 for bad input or an
+Exit code 0 when ok or no_equilibrium, 1 when the simulation failed (reason recorded), 2 for bad input or an
 output directory that cannot be written (one message naming it); input found bad only once the
 model is built (a `steps[].stop.column` that names no history column) is refused the same way,
 before the first increment, and leaves no case directory behind.
@@ -24,6 +27,7 @@ from femcontact.config.scene import case_id, load_scene
 from femcontact.process import start_mpi_for_meshing
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic
+from femcontact.outputs.result import ANSWERS
 
 STALE_COMPILATION_AGE = 600.0  # s; a form compiles in well under a minute
 _CLEANED_CACHES = set()  # JIT caches this process has cleaned (a study's warm worker runs many cases)
@@ -112,7 +116,7 @@ def command(args) -> int:
         write_json_atomic(case_dir / "result.json", result)
         if not args.quiet:
             print_summary(result, case_dir)
-    return 0 if result["status"] == "ok" else 1
+    return 0 if result["status"] in ANSWERS else 1
 
 
 def withdraw(case_dir: Path, created: bool) -> None:

@@ -4,6 +4,7 @@ A contact scene runs through the solver (history streamed to `history.csv`, prog
 standard error), then its family adds its own metrics (`FAMILY_METRICS`, by geometry);
 an RCC scene is evaluated by the truss model.
 """
+import math
 import time
 from pathlib import Path
 
@@ -42,22 +43,85 @@ def summary_metrics(simulation) -> dict:
     return metrics
 
 
+PRELOAD_FLOOR = 1e-3
+"""Contact force left by earlier steps, relative to the failing load, above which a preload may hold
+what a bare rigid peg cannot: the statics check then does not apply."""
+
+
+def no_equilibrium(simulation, failure) -> dict | None:
+    """Whether a run that failed (SimulationFailed `failure`) did so because its load has no static
+    equilibrium: {'reason', 'step', 'time', 'friction_needed', 'mu'} or None.
+
+    Decided where the mechanics are known: a 2-D rigid peg placed in two-point contact, held by
+    nothing but the hole (no compliant support), quasi-static (no inertia), and no preload left
+    by earlier steps. The solver found no converged state at the load of `failure`; the statics of
+    the rigid peg in two-point contact (`references.two_point_statics`) say whether one exists: a
+    load that needs more friction than mu has none (the peg slides or turns out of the contacts)."""
+    from femcontact.references import two_point_statics
+    from geometry.placement import peg_pose
+    from femcontact.references.peg_in_hole import l_2p
+
+    scene, load = simulation.scene, failure.load
+    if (load is None or scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
+            or scene["peg"]["placement"] != "two_point" or {"compliant_support", "inertia"} & set(scene["effects"])):
+        return None
+    step = scene["steps"][failure.step]
+    pose = peg_pose(scene)
+    if step["load_point"] not in pose.points:
+        return None
+    force, couple = [float(f) for f in load.force], float(load.moment[0])
+    size = math.hypot(*force) + abs(couple) / l_2p(scene["peg"]["width"], scene["peg"]["insertion_depth"])
+    earlier = [row for row in simulation.history if row["step"] != step["name"]]
+    if not size > 0 or (earlier and max(earlier[-1]["contact_A_force"], earlier[-1]["contact_B_force"])
+                        > PRELOAD_FLOOR * size):
+        return None
+    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    needed = two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
+                                               pose.points[step["load_point"]], couple)
+    if not needed > mu:
+        return None  # an equilibrium exists: the failure is the solver's
+    message = str(failure)
+    solver = message[message.find("after "):].split("; residual history")[0]  # 'after N cuts: ...'
+
+    reason = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
+              f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
+              f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}; the solver found none "
+              f"either ({solver})")
+    return {"reason": reason, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+
+
+def outcome_metrics(simulation, verdict: dict) -> dict:
+    """Metrics of a run that ended without a static equilibrium: the converged increments' summary,
+    where the load lost its equilibrium, and for a peg in a hole the wedging answer (not wedged)."""
+    metrics = summary_metrics(simulation) if simulation.history else {"newton_iterations": 0, "increments": 0}
+    metrics.update({"no_equilibrium_step": verdict["step"], "no_equilibrium_time": verdict["time"],
+                    "friction_needed": verdict["friction_needed"], "mu": verdict["mu"]})
+    if simulation.scene["geometry"] == "peg_in_hole":
+        from femcontact.scenarios.wedging import analytic_metrics
+
+        metrics.update(wedged=False, wedge_reason="no static equilibrium under load", **analytic_metrics(simulation.scene))
+    return metrics
+
+
 def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None, quiet: bool = True) -> dict:
     """Run a resolved contact scene; stream history.csv, write fields.npz into case_dir.
     `checkpoint`: also save the final state in case_dir/checkpoint; `restart`: start from
-    such a checkpoint (same first steps, same ranks) and run only the later steps."""
+    such a checkpoint (same first steps, same ranks) and run only the later steps. A load
+    without a static equilibrium (`no_equilibrium`) ends the run as an outcome: status
+    'no_equilibrium' with its reason, the fields of the last converged state."""
     from mpi4py import MPI
 
     from femcontact.outputs.fields import write_fields
     from femcontact.outputs.history import HistoryWriter
     from femcontact.outputs.progress import Progress
-    from femcontact.solver.stepping import Simulation
+    from femcontact.solver.stepping import Simulation, SimulationFailed
 
     if not scene["steps"]:
         raise InputError("steps: a contact scene needs at least one step")
     case_dir, rank = Path(case_dir), MPI.COMM_WORLD.rank
     history = HistoryWriter(case_dir / "history.csv", rank)
     listeners = [history] + ([] if quiet else [Progress(scene, rank=rank)])
+    verdict = None
     try:
         simulation = Simulation(scene, listeners=listeners)
         first_step = simulation.load_checkpoint(restart) if restart else 0
@@ -66,28 +130,37 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
 
             run_snap_fit(simulation, first_step)
         else:
-            simulation.run(first_step)
+            try:
+                simulation.run(first_step)
+            except SimulationFailed as failure:
+                verdict = no_equilibrium(simulation, failure)
+                if verdict is None:
+                    raise
     finally:
         for listener in listeners:
             listener.close()
     error = MPI.COMM_WORLD.bcast(history.error, root=0)  # a full disk stops every rank, none waits below
     if error is not None:
         raise error
-    if checkpoint:
+    if checkpoint and verdict is None:
         simulation.save_checkpoint(case_dir / "checkpoint")
     start = time.perf_counter()
     write_fields(simulation, case_dir)
     simulation.timings["output"] += time.perf_counter() - start
-    metrics = {**summary_metrics(simulation), **family_metrics(simulation)}
+    if verdict is None:
+        metrics = {**summary_metrics(simulation), **family_metrics(simulation)}
+    else:
+        metrics = {**outcome_metrics(simulation, verdict), "wall_time_s": float(sum(simulation.timings.values()))}
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
             "effects": list(scene["effects"]), "built": simulation.problem.built,
             "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped}
-    return {"metrics": metrics, "timings": simulation.timings, "info": info}
+    status = {} if verdict is None else {"status": "no_equilibrium", "reason": verdict["reason"]}
+    return {**status, "metrics": metrics, "timings": simulation.timings, "info": info}
 
 
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None, quiet: bool = True) -> dict:
-    """Run a resolved scene of any kind; returns {'metrics', 'timings', 'info'} or raises
-    SimulationFailed."""
+    """Run a resolved scene of any kind; returns {'metrics', 'timings', 'info'} (and 'status' and
+    'reason' for an outcome other than ok) or raises SimulationFailed."""
     if scene["kind"] == "rcc":
         from femcontact.rcc.device import run_case as run_rcc
 

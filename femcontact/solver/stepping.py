@@ -26,7 +26,12 @@ STABILIZATION_TOLERANCE = 1e-3
 
 
 class SimulationFailed(RuntimeError):
-    """The solver gave up on an increment after cutting it `max_cuts` times."""
+    """The solver gave up on an increment after cutting it `max_cuts` times: `step` (its index)
+    and `load` (the Load of the last increment tried) say where."""
+
+    def __init__(self, message: str, step: int | None = None, load=None):
+        super().__init__(message)
+        self.step, self.load = step, load
 
 
 def load_points(model) -> dict:
@@ -126,7 +131,7 @@ class Simulation:
             except NewtonFailure as error:
                 if cuts >= max_cuts:
                     raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
-                                           f"after {cuts} cuts: {error}") from None
+                                           f"after {cuts} cuts: {error}", index, load) from None
                 cuts += 1
                 dt /= 2
                 continue

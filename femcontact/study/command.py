@@ -14,7 +14,7 @@ from femcontact.io import WriteError, describe, make_dir
 from femcontact.study import slurm
 from femcontact.study.database import Database
 from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, iter_cases,
-                                     load_study, make_cases, read_result)
+                                     load_study, make_cases, read_result, status_counts)
 
 MAX_CASES = 10_000
 """Cases a study may have unless --max-cases says more: each is at least a process start and a solve."""
@@ -181,7 +181,7 @@ def _submit(study: Study, args, ranks: int, max_concurrent: int) -> int:
 
 def _needs_run(case: Case, args) -> bool:
     result = read_result(case.dir)
-    return args.force or result is None or (args.retry_failed and result["status"] != "ok")
+    return args.force or result is None or (args.retry_failed and result["status"] == "failed")
 
 
 def _raise_interrupt(signum, frame):
@@ -199,11 +199,15 @@ def _list(study: Study) -> int:
 
 
 def _summary(study: Study, start: float) -> int:
+    """Counts of ok, no_equilibrium (an answer: the load has no static equilibrium) and failed
+    cases, a line per case that is not ok; exit code 1 if any failed."""
     results = [(case, read_result(case.dir)) for case in study.cases]
-    failed = [(case, result) for case, result in results if result["status"] != "ok"]
-    print(f"study {study.settings['name']}: {len(results)} cases, {len(results) - len(failed)} ok, "
-          f"{len(failed)} failed ({time.monotonic() - start:.1f} s)")
-    for case, result in failed:
-        print(f"  failed {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
+    counts = status_counts(result for _, result in results)
+    print(f"study {study.settings['name']}: {len(results)} cases, {counts['ok']} ok, {counts['no_equilibrium']} "
+          f"without equilibrium, {counts['failed']} failed ({time.monotonic() - start:.1f} s)")
+    for case, result in results:
+        if result["status"] != "ok":
+            what = "failed" if result["status"] == "failed" else "no equilibrium"
+            print(f"  {what} {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
     print(f"results: {study.database} and {study.results / 'results.csv'}; cases in {study.results / 'cases'}/")
-    return 1 if failed else 0
+    return 1 if counts["failed"] else 0

@@ -18,10 +18,11 @@ import textwrap
 from collections import Counter
 from pathlib import Path
 
+from femcontact.outputs.result import ANSWERS
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.study import units
-from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study
+from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, status_counts
 
 
 def add_arguments(parser):
@@ -210,7 +211,7 @@ def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
     x, y = spec["x"], spec["y"]
     points = []
     for row in rows:
-        if row["status"] != "ok":
+        if row["status"] not in ANSWERS:  # a load without equilibrium answers: not wedged
             continue
         xv, yv, wedged, analytic = column(row, x), column(row, y), column(row, "wedged"), column(row, "analytic_wedged")
         if all(isinstance(v, (int, float)) for v in (xv, yv, wedged, analytic)) and math.isfinite(yv):
@@ -336,11 +337,12 @@ def _matches(scene: dict, selector: dict) -> bool:
 def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> list[tuple]:
     """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
     written as Markdown and as HTML."""
-    ok = sum(row["status"] == "ok" for row in rows)
+    counts = status_counts(rows)
     blocks = [("h1", f"Study {study.settings['name']}")]
     if study.settings["description"]:
         blocks.append(("p", study.settings["description"]))
-    blocks.append(("p", f"{len(study.cases)} cases: {ok} ok, {len(rows) - ok} failed, "
+    blocks.append(("p", f"{len(study.cases)} cases: {counts['ok']} ok, {counts['no_equilibrium']} without a static "
+                        f"equilibrium of their load, {counts['failed']} failed, "
                         f"{len(study.cases) - len(rows)} not run. Study file `{study.path}`; every column "
                         "(all metrics, timings, versions) in `results.csv` and `results.sqlite`."))
     if rows:

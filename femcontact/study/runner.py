@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
+from femcontact.outputs.result import STATUSES
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
@@ -333,6 +334,15 @@ def _describe(params: dict) -> str:
 
 # -- the case directory ---------------------------------------------------------------------------
 
+def status_counts(results) -> dict:
+    """{status: number of results} over STATUSES (results without a result file are not counted)."""
+    counts = dict.fromkeys(STATUSES, 0)
+    for result in results:
+        if result is not None:
+            counts[result["status"] if result["status"] in counts else "failed"] += 1
+    return counts
+
+
 def read_result(case_dir: Path) -> dict | None:
     """The case's result, or None when it has none (not run, or interrupted)."""
     try:
@@ -586,8 +596,7 @@ class Runner:
                 pending.remove(case)
                 prefix = prefix_results.get(case.prefix.id) if case.prefix else None
                 if prefix is not None and prefix["status"] != "ok":
-                    result = {"status": "failed", "reason": f"shared prefix {case.prefix.id} failed: "
-                              f"{prefix['reason']}", "metrics": {}, "timings": {}, "info": {}}
+                    result = prefix_outcome(case.prefix.id, prefix)
                     make_dir(case.dir)
                     write_text_atomic(case.dir / "scene.toml", to_toml(case.scene))
                     write_json_atomic(case.dir / "runner.json", self.provenance)
@@ -620,6 +629,16 @@ class Runner:
     def _finish(self, case: Case, result: dict) -> None:
         self.database.record(case)
         self.progress.finished(case, result)
+
+
+def prefix_outcome(prefix_id: str, prefix: dict) -> dict:
+    """The result of a case whose shared prefix did not end ok: without equilibrium as its prefix
+    (the later steps are never reached), or failed."""
+    if prefix["status"] == "no_equilibrium":
+        return {"status": "no_equilibrium", "reason": f"shared prefix {prefix_id}: {prefix['reason']}",
+                "metrics": prefix.get("metrics", {}), "timings": {}, "info": {}}
+    return {"status": "failed", "reason": f"shared prefix {prefix_id} failed: {prefix['reason']}",
+            "metrics": {}, "timings": {}, "info": {}}
 
 
 def _signal_group(process: subprocess.Popen, sig: int) -> None:
@@ -680,7 +699,7 @@ class Progress:
     def finished(self, case: Case, result: dict, prefix: bool = False) -> None:
         if not prefix:
             self.done += 1
-            self.failed += result["status"] != "ok"
+            self.failed += result["status"] == "failed"
         if self.quiet or (self.bar and result["status"] == "ok"):
             return
         what = f"prefix {case.id}" if prefix else f"{case.id} {_describe(case.params)}"

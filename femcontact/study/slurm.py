@@ -29,8 +29,10 @@ from pathlib import Path
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_text_atomic
 from femcontact.io import write_json_atomic as _write_json
-from femcontact.study.runner import (Case, Study, _describe, _exit_reason, _signal_group, case_command, provenance,
-                                     read_result, remove_unfinished_compilations, take_slot, to_toml)
+from femcontact.outputs.result import ANSWERS, STATUSES
+from femcontact.study.runner import (Case, Study, _describe, _exit_reason, _signal_group, case_command,
+                                     prefix_outcome, provenance, read_result, remove_unfinished_compilations,
+                                     take_slot, to_toml)
 
 ACTIVE = {"PENDING", "RUNNING", "CONFIGURING", "COMPLETING", "SUSPENDED", "REQUEUED", "REQUEUE_HOLD",
           "REQUEUE_FED", "RESIZING", "SIGNALING", "STAGE_OUT"}
@@ -151,7 +153,7 @@ def select(study: Study, active: dict, retry_failed: bool, force: bool) -> tuple
     cases = []
     for case in study.cases:
         result = read_result(case.dir)
-        if case.id not in active and (force or result is None or (retry_failed and result["status"] != "ok")):
+        if case.id not in active and (force or result is None or (retry_failed and result["status"] == "failed")):
             cases.append(case)
     prefixes = {case.prefix.id: case.prefix for case in cases if case.prefix is not None
                 and case.prefix.id not in active
@@ -228,7 +230,7 @@ def _submit_array(study: Study, kind: str, cases: list[Case], stamp: str, *, ran
 def status(study: Study, stream=None, local: dict | None = None) -> dict:
     """Print a line per case (id, state, parameters, SLURM task) and the counts; returns the counts.
 
-    States: ok, failed (a result), running / queued (a SLURM task of a recorded submission, or with
+    States: ok, no_equilibrium, failed (a result), running / queued (a SLURM task of a recorded submission, or with
     `local`, the {'started': time} of a `femcontact study` running here: started by it / not yet), missing."""
     try:
         active = active_tasks(study) if read_submissions(study) else {}
@@ -236,12 +238,12 @@ def status(study: Study, stream=None, local: dict | None = None) -> dict:
         print(f"note: {error}; SLURM states unknown", file=sys.stderr)
         active = {}
     stream = stream or sys.stdout
-    counts = dict.fromkeys(("ok", "failed", "running", "queued", "missing"), 0)
+    counts = dict.fromkeys((*STATUSES, "running", "queued", "missing"), 0)
     for case in study.cases:
         result = read_result(case.dir)
         task = active.get(case.id)
         if result is not None:
-            state = "ok" if result["status"] == "ok" else "failed"
+            state = result["status"] if result["status"] in STATUSES else "failed"
         elif task:
             state = "running" if task["state"] in ("RUNNING", "COMPLETING", "CONFIGURING") else "queued"
         elif local is not None:
@@ -251,7 +253,8 @@ def status(study: Study, stream=None, local: dict | None = None) -> dict:
         counts[state] += 1
         where = f"  [job {task['job']}_{task['index']}]" if task else ""
         print(f"{case.id}  {state:7s}  {_describe(case.params)}{where}", file=stream)
-    print(f"study {study.settings['name']}: {len(study.cases)} cases: {counts['ok']} done, {counts['failed']} failed, "
+    print(f"study {study.settings['name']}: {len(study.cases)} cases: {counts['ok']} done, {counts['no_equilibrium']} "
+          f"without equilibrium, {counts['failed']} failed, "
           f"{counts['running']} running, {counts['queued']} queued, {counts['missing']} missing", file=stream)
     return counts
 
@@ -284,10 +287,9 @@ def run_task(manifest_path: Path, index: int) -> int:
             return 1
         if prefix["status"] != "ok":
             _write_json(case_dir / "runner.json", {**versions, "slurm": slurm})
-            _write_json(case_dir / "result.json", {
-                "status": "failed", "reason": f"shared prefix {Path(task['prefix']).name} failed: {prefix['reason']}",
-                "metrics": {}, "timings": {}, "info": {}})
-            return 1
+            result = prefix_outcome(Path(task["prefix"]).name, prefix)
+            _write_json(case_dir / "result.json", result)
+            return 0 if result["status"] in ANSWERS else 1
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femcontact-jit"
     slot, lock = take_slot(cache, "slurm-slot")
     remove_unfinished_compilations(cache, slot)
@@ -330,7 +332,7 @@ def run_task(manifest_path: Path, index: int) -> int:
     runner = json.loads((case_dir / "runner.json").read_text())
     _write_json(case_dir / "runner.json", {**runner, "wall": time.monotonic() - start})
     lock.close()
-    return 0 if result["status"] == "ok" else 1
+    return 0 if result["status"] in ANSWERS else 1
 
 
 if __name__ == "__main__":

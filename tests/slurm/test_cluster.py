@@ -97,7 +97,7 @@ def test_rcc_study_through_slurm_equals_the_local_run(tmp_path, capsys):
     wait(study)
     assert main(study_args(path, tmp_path / "slurm", "--status")) == 0
     assert capsys.readouterr().out.splitlines()[-1] == \
-        "study rcc_slurm: 6 cases: 6 done, 0 failed, 0 running, 0 queued, 0 missing"
+        "study rcc_slurm: 6 cases: 6 done, 0 without equilibrium, 0 failed, 0 running, 0 queued, 0 missing"
     for case in study.cases:  # each case ran in its array task of this job
         runner = json.loads((case.dir / "runner.json").read_text())
         assert runner["slurm"]["job"] == job and runner["command"][:3] == ["srun", "-n", "1"]
@@ -167,7 +167,7 @@ def test_cancelled_task_is_resubmitted_alone_and_nothing_is_redone(tmp_path, mon
     wait(study)
     assert main(study_args(path, results, "--status")) == 0
     assert capsys.readouterr().out.splitlines()[-1] == \
-        "study demo: 6 cases: 6 done, 0 failed, 0 running, 0 queued, 0 missing"
+        "study demo: 6 cases: 6 done, 0 without equilibrium, 0 failed, 0 running, 0 queued, 0 missing"
     assert calls(tmp_path) == {case.id: 2 if case is victim else 1 for case in study.cases}
     for case in study.cases:
         result = json.loads((case.dir / "result.json").read_text())
@@ -193,7 +193,7 @@ def test_shared_prefixes_first_and_cases_on_two_mpi_ranks(tmp_path, monkeypatch,
     wait(study)
     assert main(study_args(path, results, "--status")) == 0
     assert capsys.readouterr().out.splitlines()[-1] == \
-        "study pulls: 4 cases: 4 done, 0 failed, 0 running, 0 queued, 0 missing"
+        "study pulls: 4 cases: 4 done, 0 without equilibrium, 0 failed, 0 running, 0 queued, 0 missing"
     assert calls(tmp_path) == {identity: 1 for identity in prefixes["ids"] + cases["ids"]}
     assert len(prefixes["ids"]) == 2
     for case in study.cases:

@@ -10,6 +10,7 @@ Environment knobs:
   FAKE_CALLS  directory: one file per invocation (to count them)
   FAKE_SLEEP  seconds to sleep before writing the result
   FAKE_FAIL_MU  contact.mu for which the case raises (exit 1, result 'failed')
+  FAKE_NO_EQUILIBRIUM_MU  contact.mu for which the case ends 'no_equilibrium' (exit 0)
   FAKE_CRASH_MU contact.mu for which the process dies without a result
   FAKE_HANG_MU  contact.mu for which the case sleeps forever
   FAKE_RANKS  expected MPI size: run under a real mpirun and check it with mpi4py
@@ -56,8 +57,10 @@ def main(argv):
 
         write_fields(out / "fields.npz", dim=int(os.environ["FAKE_FIELDS"]))
     failed = str(mu) == os.environ.get("FAKE_FAIL_MU")
-    result = {"status": "failed" if failed else "ok",
-              "reason": f"NewtonDiverged: no convergence at mu = {mu}" if failed else None,
+    loose = str(mu) == os.environ.get("FAKE_NO_EQUILIBRIUM_MU")
+    result = {"status": "failed" if failed else "no_equilibrium" if loose else "ok",
+              "reason": f"NewtonDiverged: no convergence at mu = {mu}" if failed else
+              f"step 'press': the load needs mu >= 0.5, the scene has mu = {mu}" if loose else None,
               "metrics": {} if failed else {"load": -scene["steps"][0]["force"][1],
                                             "product": mu * scene["contact"]["gamma"]},
               "timings": {"solve": time.perf_counter() - start, "total": time.perf_counter() - start},

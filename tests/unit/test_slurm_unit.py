@@ -146,7 +146,7 @@ def test_resubmission_selects_only_missing_and_failed_never_active(tmp_path, clu
                                                       [cases[2].id, "running"], [cases[3].id, "queued"],
                                                       [cases[4].id, "missing"]]
     assert lines[2].endswith("[job 100_2]")
-    assert lines[5] == "study demo: 5 cases: 1 done, 1 failed, 1 running, 1 queued, 1 missing"
+    assert lines[5] == "study demo: 5 cases: 1 done, 0 without equilibrium, 1 failed, 1 running, 1 queued, 1 missing"
     assert (tmp_path / "results/demo/results.csv").read_text().count("\n") == 3  # header + 2 results
 
     assert [c.id for c in select(study, active_tasks(study), False, False)[0]] == [cases[4].id]

@@ -50,7 +50,8 @@ def fake(tmp_path, monkeypatch):
     calls = tmp_path / "calls"
     calls.mkdir()
     monkeypatch.setenv("FAKE_CALLS", str(calls))
-    for knob in ("FAKE_SLEEP", "FAKE_FAIL_MU", "FAKE_CRASH_MU", "FAKE_HANG_MU", "FAKE_RANKS", "FAKE_FIELDS"):
+    for knob in ("FAKE_SLEEP", "FAKE_FAIL_MU", "FAKE_NO_EQUILIBRIUM_MU", "FAKE_CRASH_MU", "FAKE_HANG_MU", "FAKE_RANKS",
+                 "FAKE_FIELDS"):
         monkeypatch.delenv(knob, raising=False)
 
     def count() -> dict:
@@ -136,7 +137,7 @@ def test_failures_do_not_stop_the_sweep_and_csv_matches_database(tmp_path, fake,
     monkeypatch.setenv("FAKE_CRASH_MU", "0.3")
     assert run_study(path) == 1
     out = capsys.readouterr().out
-    assert "4 cases, 2 ok, 2 failed" in out and "NewtonDiverged: no convergence at mu = 0.2" in out
+    assert "4 cases, 2 ok, 0 without equilibrium, 2 failed" in out and "NewtonDiverged: no convergence at mu = 0.2" in out
     results = results_of(path)
     cases = path.parent / "results/demo/cases"
     by_mu = {tomllib.loads((cases / i / "scene.toml").read_text())["contact"]["mu"]: r for i, r in results.items()}
@@ -463,10 +464,34 @@ def test_status_during_a_local_run_shows_running_and_queued_cases(tmp_path, caps
             time.sleep(0.05)
         assert main(["study", str(path), "--results", str(results), "--status"]) == 0
         out = capsys.readouterr().out
-        assert out.splitlines()[-1].endswith("3 cases: 0 done, 0 failed, 1 running, 2 queued, 0 missing"), out
+        assert out.splitlines()[-1].endswith("3 cases: 0 done, 0 without equilibrium, 0 failed, 1 running, 2 queued, 0 missing"), out
         assert re.search(r"running\s+contact.mu=0.1", out)
     finally:
         study.terminate()
         study.communicate(timeout=30)
     assert main(["study", str(path), "--results", str(results), "--status"]) == 0  # nobody runs it now
     assert capsys.readouterr().out.splitlines()[-1].endswith("0 running, 0 queued, 3 missing")
+
+
+def test_a_case_without_equilibrium_is_an_answer_counted_apart_and_not_retried(tmp_path, fake, monkeypatch, capsys):
+    path = make_study(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1, 0.2, 0.3] }')
+    monkeypatch.setenv("FAKE_NO_EQUILIBRIUM_MU", "0.1")
+    monkeypatch.setenv("FAKE_FAIL_MU", "0.2")
+    assert run_study(path) == 1  # one failed
+    out = capsys.readouterr().out
+    assert "3 cases, 1 ok, 1 without equilibrium, 1 failed" in out
+    assert re.search(r"no equilibrium \w+ contact.mu=0.1: step 'press': the load needs mu >= 0.5", out)
+    before = fake()
+    assert run_study(path, "--retry-failed") == 1
+    again = fake()
+    assert sum(again.values()) == sum(before.values()) + 1  # only the failed case ran again
+    monkeypatch.delenv("FAKE_FAIL_MU")
+    assert run_study(path, "--retry-failed") == 0  # an answer and two ok: nothing failed
+    assert main(["study", str(path), "--results", str(tmp_path / "results"), "--status"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1].endswith("3 cases: 2 done, 1 without equilibrium, 0 failed, "
+                                                             "0 running, 0 queued, 0 missing")
+    assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
+    summary = (tmp_path / "results/demo/summary.md").read_text()
+    assert "3 cases: 2 ok, 1 without a static equilibrium of their load, 0 failed" in summary
+    with sqlite3.connect(tmp_path / "results/demo/results.sqlite") as db:
+        assert sorted(s for (s,) in db.execute("SELECT status FROM cases")) == ["no_equilibrium", "ok", "ok"]

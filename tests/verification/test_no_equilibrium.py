@@ -1,0 +1,67 @@
+"""A load without a static equilibrium is an outcome, not a failure.
+
+The wedging scene (d 40, D 40.1, l_d 5, a push [-5, 1] N on the peg top) needs mu >= 0.067 for
+the rigid peg in two-point contact to hold the push (references.two_point_statics, verified in
+test_two_point_statics.py). Without friction the peg cannot be held, let alone wedge: the run
+ends with status `no_equilibrium`, naming the step, the load and that friction, and answers
+"not wedged". Where the statics say an equilibrium exists, a solver failure stays `failed`.
+"""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from femcontact.config.scene import load_scene
+from femcontact.references import two_point_statics
+from geometry.placement import peg_pose
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "scenes" / "wedging_2d.toml"
+COARSE = ["mesh.resolution=0.5"]
+
+
+def needed(scene: dict) -> float:
+    pose = peg_pose(scene)
+    return two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), [-5.0, 1.0],
+                                             pose.points["peg_top"], 0.0)
+
+
+def test_a_frictionless_peg_pushed_sideways_ends_without_equilibrium_and_not_wedged(tmp_path):
+    out = tmp_path / "case"
+    overrides = [*COARSE, "contact.mu=0", "solver.max_cuts=2"]
+    code = subprocess.run([sys.executable, "-m", "femcontact", "run", str(SCENE), "--quiet", "--out", str(out),
+                           *sum((["--set", o] for o in overrides), [])], cwd=ROOT).returncode
+    result = json.loads((out / "result.json").read_text())
+    assert code == 0 and result["status"] == "no_equilibrium", result["reason"]
+    metrics = result["metrics"]
+    assert metrics["wedged"] is False and metrics["analytic_wedged"] is False
+    assert metrics["friction_needed"] == pytest.approx(needed(load_scene(SCENE, overrides)), rel=1e-5)
+    assert 0.06 < metrics["friction_needed"] < 0.075 and metrics["mu"] == 0.0
+    assert metrics["no_equilibrium_step"] == "load"
+    reason = result["reason"]
+    assert reason.startswith("step 'load' at t = ") and "at peg_top" in reason
+    assert f"it needs mu >= {metrics['friction_needed']:.4g}, the scene has mu = 0" in reason
+
+
+@pytest.mark.parametrize("mu, status", [(0.05, "no_equilibrium"), (0.08, "failed")])
+def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, status):
+    """Newton made to fail at every increment: below the friction the push needs (0.067) the
+    run ends without equilibrium, above it the failure is the solver's and stays a failure."""
+    from femcontact.scenarios.case import run_contact
+    from femcontact.solver import newton
+    from femcontact.solver.stepping import SimulationFailed
+
+    def stalled(self, load):
+        raise newton.NewtonFailure("no convergence in 40 iterations", [1.0, 0.99])
+
+    monkeypatch.setattr(newton.SchurNewton, "solve", stalled)
+    scene = load_scene(SCENE, [*COARSE, f"contact.mu={mu}", "solver.max_cuts=0"])
+    if status == "failed":
+        with pytest.raises(SimulationFailed):
+            run_contact(scene, tmp_path)
+        return
+    result = run_contact(scene, tmp_path)
+    assert result["status"] == status and result["metrics"]["increments"] == 0
+    assert result["metrics"]["friction_needed"] == pytest.approx(needed(scene), rel=1e-5)
