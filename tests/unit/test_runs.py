@@ -125,3 +125,30 @@ def test_a_stop_column_ends_the_run_and_the_columns_are_the_history_header(tmp_p
     assert list(rows[0]) == columns
     assert 0 < len(rows) < 10 and abs(float(rows[-1]["support_Fy"])) > 0.05
     assert all(abs(float(row["support_Fy"])) <= 0.05 for row in rows[:-1])
+
+
+def test_a_rows_newton_iterations_sum_the_solves_of_the_stabilisation_continuation(monkeypatch):
+    """An increment whose plain solve fails is solved again at each stabilisation level; its row
+    counts the iterations of every solve that led to it (solver.max_iterations bounds each solve,
+    not the row, as its doc says)."""
+    from femcontact.config.scene import SOLVER
+    from femcontact.solver import newton, stepping
+    from femcontact.solver.stepping import Simulation
+
+    scene = load_scene(SCENE, ["mesh.resolution=0.5", "steps.0.increments=1"])
+    simulation = Simulation(scene)
+    real, solves = newton.SchurNewton.solve, []
+
+    def first_fails(self, load):
+        if not solves:
+            solves.append(None)
+            raise newton.NewtonFailure("no convergence in 40 iterations", [1.0])
+        solves.append(real(self, load))
+        return solves[-1]
+
+    monkeypatch.setattr(newton.SchurNewton, "solve", first_fails)
+    simulation.run_step(0, scene["steps"][0])
+    counted = solves[1:]  # the failed plain solve is not counted
+    assert len(counted) == len(stepping.STABILIZATION_FACTORS) and simulation.stabilized_increments == 1
+    assert simulation.history[0]["newton_iterations"] == sum(counted) > max(counted)
+    assert "sum over the solves that led to the converged increment" in SOLVER["max_iterations"].doc
