@@ -155,4 +155,3 @@ def check_stop_columns(scene: dict, columns: list[str]) -> None:
         if column and column not in columns:
             raise InputError(f"steps[{i}].stop.column = {column!r}: no such history column, expected one of "
                              + ", ".join(columns))
-

@@ -58,8 +58,8 @@ def no_equilibrium(simulation, failure) -> dict | None:
     the rigid peg in two-point contact (`references.two_point_statics`) say whether one exists: a
     load that needs more friction than mu has none (the peg slides or turns out of the contacts)."""
     from femcontact.references import two_point_statics
-    from geometry.placement import peg_pose
     from femcontact.references.peg_in_hole import l_2p
+    from geometry.placement import peg_pose
 
     scene, load = simulation.scene, failure.load
     if (load is None or scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
@@ -82,7 +82,6 @@ def no_equilibrium(simulation, failure) -> dict | None:
         return None  # an equilibrium exists: the failure is the solver's
     message = str(failure)
     solver = message[message.find("after "):].split("; residual history")[0]  # 'after N cuts: ...'
-
     reason = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
               f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
               f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}; the solver found none "

@@ -37,7 +37,7 @@ def add_arguments(parser):
     parser.add_argument("--list", action="store_true",
                         help="list the cases and their state as they are made, run nothing")
     parser.add_argument("--status", action="store_true",
-                        help="a line per case (ok, failed, running, queued, missing) and the counts; "
+                        help="a line per case (ok, no_equilibrium, failed, running, queued, missing) and the counts; "
                              "rebuilds the database and CSV; runs nothing")
     parser.add_argument("--launcher", default=None,
                         help="command prefix starting an MPI job of {ranks} ranks (default: the study's "

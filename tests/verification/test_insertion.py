@@ -90,11 +90,9 @@ def test_support_motion_needs_the_effect():
 
 
 def test_a_bad_stiffness_matrix_is_refused_naming_the_key():
-    from femcontact.effects.compliant_support import stiffness_matrix
-
-    scene = load_scene(SCENE, ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"])
-    with pytest.raises(InputError, match="support.stiffness: 2 values, expected 9"):
-        stiffness_matrix(scene)
+    """Refused when the scene is loaded, before anything is built."""
+    with pytest.raises(InputError, match=r"support.stiffness = \[1.0, 2.0\]: 2 values, expected 9"):
+        load_scene(SCENE, ["support.model='matrix'", "support.stiffness=[1.0, 2.0]"])
 
 
 def test_rcc_support_reduces_to_the_x_z_plane():
