@@ -6,7 +6,9 @@ thing, `result.json`:
 {"status": "ok"|"no_equilibrium"|"failed", "reason": str|null, "metrics": {...}, "timings": {...}, "info": {...}}.
 `no_equilibrium`: a load of a 2-D rigid peg in two-point contact that no static equilibrium can
 carry (it needs more friction than mu): the reason names the step, the load and the friction it
-needs; the metrics are those of the converged increments (a peg in a hole: not wedged).
+needs; the metrics are those of the converged increments (a peg in a hole: not wedged). With
+`inertia` the load runs on until the peg leaves contact, comes to rest or the step ends
+(metric `run_on`).
 A metric that is undefined (NaN or infinite) is written as null and listed in
 `info.undefined_metrics`. Progress goes to standard error (`--quiet` silences it and the summary).
 Exit code 0 when ok or no_equilibrium, 1 when the simulation failed (reason recorded), 2 for bad input or an

@@ -46,26 +46,28 @@ def summary_metrics(simulation) -> dict:
 PRELOAD_FLOOR = 1e-3
 """Contact force left by earlier steps, relative to the failing load, above which a preload may hold
 what a bare rigid peg cannot: the statics check then does not apply."""
+REST_FRACTION = 1e-3
+"""A peg running on under a load without equilibrium is at rest once its speed falls below this
+fraction of the largest it reached in the step."""
 
 
-def no_equilibrium(simulation, failure) -> dict | None:
-    """Whether a run that failed (SimulationFailed `failure`) did so because its load has no static
-    equilibrium: {'reason', 'step', 'time', 'friction_needed', 'mu'} or None.
+def statics_verdict(simulation, index: int, load) -> dict | None:
+    """Whether `load` in step `index` has no static equilibrium: {'load', 'step', 'time',
+    'friction_needed', 'mu'} or None (it has one, or the statics do not apply).
 
-    Decided where the mechanics are known: a 2-D rigid peg placed in two-point contact, held by
-    nothing but the hole (no compliant support), quasi-static (no inertia), and no preload left
-    by earlier steps. The solver found no converged state at the load of `failure`; the statics of
-    the rigid peg in two-point contact (`references.two_point_statics`) say whether one exists: a
-    load that needs more friction than mu has none (the peg slides or turns out of the contacts)."""
+    The statics apply to a 2-D rigid peg placed in two-point contact, held by nothing but the
+    hole (no compliant support), with no preload left by earlier steps: then a load that needs
+    more friction than mu (`references.two_point_statics`) has no equilibrium (the peg slides or
+    turns out of the contacts)."""
     from femcontact.references import two_point_statics
     from femcontact.references.peg_in_hole import l_2p
     from geometry.placement import peg_pose
 
-    scene, load = simulation.scene, failure.load
-    if (load is None or scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
-            or scene["peg"]["placement"] != "two_point" or {"compliant_support", "inertia"} & set(scene["effects"])):
+    scene = simulation.scene
+    if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
+            or scene["peg"]["placement"] != "two_point" or "compliant_support" in scene["effects"]):
         return None
-    step = scene["steps"][failure.step]
+    step = scene["steps"][index]
     pose = peg_pose(scene)
     if step["load_point"] not in pose.points:
         return None
@@ -79,14 +81,68 @@ def no_equilibrium(simulation, failure) -> dict | None:
     needed = two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
                                                pose.points[step["load_point"]], couple)
     if not needed > mu:
-        return None  # an equilibrium exists: the failure is the solver's
+        return None
+    text = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
+            f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
+            f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}")
+    return {"load": text, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+
+
+def no_equilibrium(simulation, failure) -> dict | None:
+    """Whether a quasi-static run that failed (SimulationFailed `failure`) did so because its load
+    has no static equilibrium (`statics_verdict`): the verdict with its 'reason', or None."""
+    if failure.load is None or "inertia" in simulation.scene["effects"]:
+        return None
+    verdict = statics_verdict(simulation, failure.step, failure.load)
+    if verdict is None:
+        return None  # an equilibrium exists (or the statics do not apply): the failure is the solver's
     message = str(failure)
     solver = message[message.find("after "):].split("; residual history")[0]  # 'after N cuts: ...'
-    reason = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
-              f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
-              f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}; the solver found none "
-              f"either ({solver})")
-    return {"reason": reason, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+    return {**verdict, "reason": f"{verdict['load']}; the solver found none either ({solver})"}
+
+
+class RunOn:
+    """With inertia, a load without a static equilibrium (`statics_verdict` at the step's end load)
+    runs on dynamically until the peg leaves contact (both zones carry no force), comes to rest
+    (`REST_FRACTION`) or the step ends; then the run ends (a Simulation event) and `verdict` says
+    which ('run_on': 'left_contact', 'at_rest' or 'step_end')."""
+
+    def __init__(self, simulation):
+        self.simulation, self.verdicts, self.verdict = simulation, {}, None
+        self.previous, self.peak = None, 0.0
+
+    def __call__(self, index: int, row: dict) -> str:
+        sim = self.simulation
+        step = sim.scene["steps"][index]
+        if index not in self.verdicts:
+            self.verdicts[index] = statics_verdict(sim, index, sim.schedule.load(index, step["duration"], row["dt"]))
+            self.previous, self.peak = None, 0.0
+        verdict = self.verdicts[index]
+        if verdict is None:
+            return ""
+        speed = self._speed(row)
+        self.peak = max(self.peak, speed)
+        end = sim.schedule.start_times[index] + step["duration"]
+        if row["contact_A_force"] == 0 and row["contact_B_force"] == 0:
+            how, said = "left_contact", "the peg left contact"
+        elif self.previous is not None and self.peak > 0 and speed < REST_FRACTION * self.peak:
+            how, said = "at_rest", "the peg came to rest"
+        elif row["time"] >= end * (1 - 1e-12):
+            how, said = "step_end", "the step ended, the peg still moving"
+        else:
+            self.previous = row
+            return ""
+        self.verdict = {**verdict, "run_on": how, "run_on_time": row["time"],
+                        "reason": f"{verdict['load']}; with inertia it ran on: {said} at t = {row['time']:.6g} s"}
+        return self.verdict["reason"]
+
+    def _speed(self, row: dict) -> float:
+        """The peg's speed over the increment (mm/s): its reference point's plus its rotation's at half its width."""
+        if self.previous is None:
+            return 0.0
+        moved = math.hypot(row["rigid_x"] - self.previous["rigid_x"], row["rigid_y"] - self.previous["rigid_y"])
+        turned = abs(row["rigid_rz"] - self.previous["rigid_rz"]) * self.simulation.scene["peg"]["width"] / 2
+        return (moved + turned) / row["dt"]
 
 
 def outcome_metrics(simulation, verdict: dict) -> dict:
@@ -95,6 +151,8 @@ def outcome_metrics(simulation, verdict: dict) -> dict:
     metrics = summary_metrics(simulation) if simulation.history else {"newton_iterations": 0, "increments": 0}
     metrics.update({"no_equilibrium_step": verdict["step"], "no_equilibrium_time": verdict["time"],
                     "friction_needed": verdict["friction_needed"], "mu": verdict["mu"]})
+    if "run_on" in verdict:
+        metrics.update(run_on=verdict["run_on"], run_on_time=verdict["run_on_time"])
     if simulation.scene["geometry"] == "peg_in_hole":
         from femcontact.scenarios.wedging import analytic_metrics
 
@@ -129,12 +187,16 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
 
             run_snap_fit(simulation, first_step)
         else:
+            run_on = RunOn(simulation)
+            if "inertia" in scene["effects"]:
+                simulation.events.append(run_on)
             try:
                 simulation.run(first_step)
             except SimulationFailed as failure:
                 verdict = no_equilibrium(simulation, failure)
                 if verdict is None:
                     raise
+            verdict = verdict or run_on.verdict
     finally:
         for listener in listeners:
             listener.close()

@@ -70,6 +70,7 @@ class Simulation:
                               for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
         self.stabilized_increments = 0
         self.stopped = ""  # why the run ended before its last step, if a stop condition did it
+        self.events = []  # callables(index, row) -> str: a non-empty answer ends the run (`stopped`)
         self.last_change = None  # (step, dt, displacement change) of the last converged increment
         self.stabilization_force = 0.0
         self.timings["solve"] = 0.0
@@ -117,7 +118,7 @@ class Simulation:
 
     def run_step(self, index: int, step: dict) -> bool:
         """Advance through one step with adaptive increments; False when the step's stop
-        condition (|row[stop.column]| > stop.value) ended the run early (`self.stopped`)."""
+        condition (|row[stop.column]| > stop.value) or an event ended the run early (`self.stopped`)."""
         from femcontact.solver.newton import NewtonFailure
 
         nominal = step["duration"] / step["increments"]
@@ -139,6 +140,9 @@ class Simulation:
             stop = step["stop"]
             if stop["column"] and abs(row.get(stop["column"], 0.0)) > stop["value"]:
                 self.stopped = f"step {step['name']!r}: |{stop['column']}| > {stop['value']:g} at t = {load.time:.6g} s"
+                return False
+            self.stopped = next((text for text in (event(index, row) for event in self.events) if text), "")
+            if self.stopped:
                 return False
             t += dt
             if cuts and row["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:

@@ -65,3 +65,34 @@ def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, 
     result = run_contact(scene, tmp_path)
     assert result["status"] == status and result["metrics"]["increments"] == 0
     assert result["metrics"]["friction_needed"] == pytest.approx(needed(scene), rel=1e-5)
+
+
+INERTIA = [*COARSE, "contact.mu=0", "effects=['friction', 'plane_strain', 'inertia']"]
+
+
+def run(tmp_path, overrides) -> dict:
+    out = tmp_path / "case"
+    code = subprocess.run([sys.executable, "-m", "femcontact", "run", str(SCENE), "--quiet", "--out", str(out),
+                           *sum((["--set", o] for o in overrides), [])], cwd=ROOT).returncode
+    assert code == 0
+    return json.loads((out / "result.json").read_text())
+
+
+def test_with_inertia_a_pull_without_equilibrium_runs_on_until_the_peg_leaves_contact(tmp_path):
+    """A frictionless peg pulled along +y: an axial pull needs mu >= l_d / d (= 5 / 40, the wedging
+    bound l_max = mu d read backwards); with inertia the peg runs on and leaves both contacts."""
+    result = run(tmp_path, [*INERTIA, "steps.0.force=[0.0, 5.0]", "steps.0.duration=0.004", "steps.0.increments=4"])
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium" and metrics["run_on"] == "left_contact"
+    assert metrics["friction_needed"] == pytest.approx(5.0 / 40.0, rel=1e-5)
+    assert metrics["run_on_time"] < 0.004 and metrics["wedged"] is False
+    assert "with inertia it ran on: the peg left contact at t = " in result["reason"]
+
+
+def test_with_inertia_a_push_without_equilibrium_says_the_step_ended_with_the_peg_moving(tmp_path):
+    result = run(tmp_path, [*INERTIA, "steps.0.duration=0.002", "steps.0.increments=2"])
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium" and metrics["run_on"] == "step_end"
+    assert metrics["run_on_time"] == pytest.approx(0.002) and metrics["increments"] == 2
+    assert metrics["friction_needed"] == pytest.approx(needed(load_scene(SCENE, INERTIA)), rel=1e-5)
+    assert "the step ended, the peg still moving at t = 0.002 s" in result["reason"]
