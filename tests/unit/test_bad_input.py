@@ -103,6 +103,15 @@ RUN_CASES = [
     (["solver.petsc_options={kps_type='cg'}"], ["solver.petsc_options.kps_type: not a linear-solver option"]),
     (["solver.petsc_options={ksp_rtol=nan}"], ["solver.petsc_options.ksp_rtol = nan: not a finite number"]),
     (["solver.petsc_options=3"], ["solver.petsc_options = 3: must be a table"]),
+    (["effects=['plasticity', 'plane_stress']"], ["'plasticity' is small-strain, plane strain or 3-D"]),
+    (["effects=['plasticity', 'large_strain']"], ["'plasticity' is small-strain"]),
+    (["plasticity.hardening=[[0, 210], [1, 200]]"], ["plasticity.hardening = [[0, 210], [1, 200]]", "no softening"]),
+    (["plasticity.hardening=[[0.1, 210]]"], ["plasticity.hardening", "start at 0"]),
+    (["plasticity.hardening=[[0, 210, 1]]"], ["plasticity.hardening", "[[plastic strain, yield stress (MPa)], ...]"]),
+    (["plasticity.hardening=[[0, nan]]"], ["plasticity.hardening", "finite"]),
+    (["plasticity.hardening_modulus=-1"], ["plasticity.hardening_modulus = -1"]),
+    (["effects=['plasticity']", "plasticity.hardening=[[0, 200], [1, 290]]"],
+     ["plasticity.hardening = [[0, 200], [1, 290]]: its first yield stress must be materials.hole.yield_stress = 210"]),
 ]
 
 
