@@ -172,3 +172,26 @@ def test_thick_cylinder_follows_hill_to_the_limit_pressure_with_errors_falling()
     print("largest p error / p_L per level:", errors)
     assert errors[0] > errors[1] > errors[2] and errors[2] < 5e-4
     assert rows[-1]["hill"] == pytest.approx(limit) and rows[-1]["pressure"] == pytest.approx(limit, rel=1e-4)
+
+
+def test_wedging_below_yield_is_the_elastic_answer():
+    """Named but never reached, the yield surface changes nothing: the wedging scene (peak von
+    Mises 0.9 of yield at this mesh) gives the elastic scene's reactions and pose to the solver's
+    tolerance (residual 1e-6 N on forces of 7 N: 1e-6 relative; the two solve the same equations
+    with different linear algebra), with PEEQ and the plastic zone exactly zero."""
+    from femcontact.config.scene import resolve
+    from femcontact.solver.stepping import Simulation
+
+    base = {"name": "below_yield", "dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40.0, "length": 10.0,
+            "insertion_depth": 5.0}, "hole": {"width": 40.1}, "contact": {"mu": 0.2}, "mesh": {"resolution": 0.5},
+            "steps": [{"name": "load", "increments": 2, "force": [-5.0, 1.0]}, {"name": "release", "increments": 2}]}
+    rows = {}
+    for effects in (["friction", "plane_strain"], ["friction", "plane_strain", "plasticity"]):
+        simulation = Simulation(resolve({**base, "effects": effects}), MPI.COMM_SELF)
+        simulation.run()
+        rows["plasticity" in effects] = simulation.step_end_rows()["release"]
+    elastic, plastic = rows[False], rows[True]
+    assert elastic["max_von_mises"] < 210.0
+    assert plastic["max_peeq"] == 0.0 and plastic["plastic_zone"] == 0.0
+    for key in ("reaction_support_A_x", "reaction_support_B_x", "contact_A_Fx", "tilt_deg", "max_von_mises"):
+        assert plastic[key] == pytest.approx(elastic[key], rel=1e-6), key
