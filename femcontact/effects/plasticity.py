@@ -10,7 +10,8 @@ elastic stress into the returned one; its derivative is the consistent tangent, 
 that depends on the state the solver assembles the bulk stiffness at every iteration.
 Contact (Nitsche's stress), von Mises and energy outputs use the returned stress from each
 cell's mean plastic state (exact for P1 elements). Adds history columns `max_peeq` and
-`plastic_zone` (area in 2-D, mm^2 per unit thickness; volume in 3-D, mm^3).
+`plastic_zone` (area in 2-D, mm^2 per unit thickness; volume in 3-D, mm^3, where PEEQ > 0)
+and the cell field `peeq` (fields.npz, ParaView).
 """
 import numpy as np
 import ufl
@@ -62,6 +63,9 @@ class Plasticity(Effect):
         peeq = self._updated()[1][:n_owned]
         return {"max_peeq": comm.allreduce(float(peeq.max(initial=0.0)), op=MPI.MAX),
                 "plastic_zone": comm.allreduce(fem.assemble_scalar(self.plastic_zone), op=MPI.SUM)}
+
+    def cell_fields(self) -> dict:
+        return {"peeq": self.quadrature.peeq_cell}
 
 
 def hardening_points(scene: dict, body: str) -> list:
