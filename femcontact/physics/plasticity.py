@@ -15,6 +15,10 @@ from dolfinx import fem
 TINY = 1e-20
 """MPa^2 added under the square root of the stress norm: its derivative stays finite where
 the deviatoric stress vanishes (an unstrained body); a relative change below 1e-20 at yield."""
+ON_SURFACE = 1e-10
+"""A point within this fraction above the yield stress is on the surface, not flowing: a state just
+returned to the surface (round-off either side) then starts the next increment with the elastic
+tangent, which is exact for unloading and only a predictor for further loading."""
 
 
 def hardening_segments(points) -> list[tuple[float, float, float]]:
@@ -74,7 +78,7 @@ def return_map(strain, plastic_strain, peeq, lmbda, mu, segments):
     for p_k, s_k, h_k in segments[1:]:
         passed = ufl.gt(q - 3 * mu * (p_k - peeq) - s_k, 0)
         dp = ufl.conditional(passed, (q - s_k - h_k * (peeq - p_k)) / (3 * mu + h_k), dp)
-    dp = ufl.conditional(ufl.gt(q, yield_stress(peeq, segments)), dp, 0.0)
+    dp = ufl.conditional(ufl.gt(q, (1 + ON_SURFACE) * yield_stress(peeq, segments)), dp, 0.0)
     flow = 1.5 * deviator / q
     return trial - 2 * mu * dp * flow, plastic_strain + dp * flow, peeq + dp
 

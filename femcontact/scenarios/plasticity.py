@@ -21,7 +21,6 @@ import json
 import time
 from pathlib import Path
 
-import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
