@@ -210,6 +210,7 @@ DYNAMICS = {
     "gravity": Field("float", 9810.0, "gravitational acceleration for the 'gravity' effect (mm/s^2)", min=0.0),
 }
 
+
 def _hardening_problem(table) -> str | None:
     """Why a hardening table [[plastic strain, yield stress], ...] is unusable, or None."""
     if table == []:
