@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -93,6 +93,10 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+
+# Plasticity on the wedging case, an edge radius under refinement, its cost; results/plasticity/plasticity.md
+plasticity: setup
+	$(PY) -m femcontact.scenarios.plasticity
 
 # What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
 accuracy: setup

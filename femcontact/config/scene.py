@@ -18,8 +18,16 @@ from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from geometry import snap_fit as snap_fit_geometry
 
-EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support")
+EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support",
+           "plasticity")
 RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
+
+
+def deformable_body(scene: dict) -> str:
+    """The deformable body's name (its key in `materials`): the rigid body's mate."""
+    if scene["geometry"] == "snap_fit":
+        return "spring"
+    return {"peg": "hole", "hole": "peg", "indenter": "block"}[scene["rigid"]]
 
 
 def _material(E=193000.0, nu=0.27, density=8.05e-9, yield_stress=210.0) -> dict:
@@ -28,7 +36,8 @@ def _material(E=193000.0, nu=0.27, density=8.05e-9, yield_stress=210.0) -> dict:
         "E": Field("float", E, "Young's modulus (MPa)", positive=True),
         "nu": Field("float", nu, "Poisson's ratio", min=0.0, max=0.4999),
         "density": Field("float", density, "density (t/mm^3)", min=0.0),
-        "yield_stress": Field("float", yield_stress, "initial yield stress (MPa), checked not modelled", positive=True),
+        "yield_stress": Field("float", yield_stress, "initial yield stress (MPa): the 'plasticity' effect's, "
+                              "else only compared with the elastic von Mises stress (`yielded`)", positive=True),
     }
 
 
@@ -210,6 +219,33 @@ DYNAMICS = {
     "gravity": Field("float", 9810.0, "gravitational acceleration for the 'gravity' effect (mm/s^2)", min=0.0),
 }
 
+
+def _hardening_problem(table) -> str | None:
+    """Why a hardening table [[plastic strain, yield stress], ...] is unusable, or None."""
+    if table == []:
+        return None
+    if not isinstance(table, list) or not all(isinstance(row, list) and len(row) == 2 for row in table):
+        return "expected [[plastic strain, yield stress (MPa)], ...]"
+    numbers = [v for row in table for v in row]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers):
+        return "expected finite numbers"
+    strains, stresses = [row[0] for row in table], [row[1] for row in table]
+    if strains[0] != 0 or any(b <= a for a, b in zip(strains, strains[1:])):
+        return "plastic strains must start at 0 and increase"
+    if stresses[0] <= 0 or any(b < a for a, b in zip(stresses, stresses[1:])):
+        return "yield stresses must be > 0 and not fall (no softening)"
+    return None
+
+
+PLASTICITY = {
+    "hardening": Field("any", [], "isotropic hardening of the 'plasticity' effect: [[plastic strain, yield stress "
+                       "(MPa)], ...], piecewise linear, its last slope continued; the first row [0, "
+                       "materials.<body>.yield_stress]. Empty: linear with `hardening_modulus`",
+                       check=_hardening_problem),
+    "hardening_modulus": Field("float", 0.0, "slope of the yield stress over the equivalent plastic strain (MPa) "
+                               "when `hardening` is empty; 0 = perfectly plastic", min=0.0),
+}
+
 OUTPUTS = {
     "fields": Field("bool", False, "write displacement, von Mises and contact pressure to XDMF"),
 }
@@ -240,6 +276,7 @@ def contact_schema(dim: int, geometry: str) -> dict:
         "steps": TableList(STEP, "load steps, in order"),
         "dynamics": DYNAMICS,
         "solver": SOLVER,
+        "plasticity": PLASTICITY,
         "outputs": OUTPUTS,
     }
     if geometry == "peg_in_hole":
@@ -264,6 +301,13 @@ def _check_contact(scene: dict) -> None:
         problems.append(f"effects = {effects}: 'plane_strain' and 'plane_stress' exclude each other")
     if dim == 3 and {"plane_strain", "plane_stress"} & set(effects):
         problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
+    if "plasticity" in effects and {"large_strain", "plane_stress"} & set(effects):
+        problems.append(f"effects = {effects}: 'plasticity' is small-strain, plane strain or 3-D "
+                        "(drop 'large_strain' and 'plane_stress')")
+    table, body = scene["plasticity"]["hardening"], deformable_body(scene)
+    if "plasticity" in effects and table and table[0][1] != scene["materials"][body]["yield_stress"]:
+        problems.append(f"plasticity.hardening = {table}: its first yield stress must be "
+                        f"materials.{body}.yield_stress = {scene['materials'][body]['yield_stress']}")
     moment_length = 1 if dim == 2 else 3
     if not scene["steps"]:
         problems.append("steps = []: a contact scene needs at least one [[steps]] table")

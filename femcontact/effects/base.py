@@ -10,8 +10,9 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
 - `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
 - `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
   the contact vector not written as integrals (node-to-segment elements);
-- `nodal_outputs()` (UFL values lumped to contact nodes, counted per row) and `outputs()`
-  (extra history columns); `load_scale()`: the size of the load it applies (N).
+- `nodal_outputs()` (UFL values lumped to contact nodes, counted per row), `outputs()`
+  (extra history columns) and `cell_fields()` (UFL values written per cell with the final
+  fields); `load_scale()`: the size of the load it applies (N).
 """
 import numpy as np
 
@@ -56,6 +57,9 @@ class Effect:
         return {}
 
     def outputs(self) -> dict:
+        return {}
+
+    def cell_fields(self) -> dict:
         return {}
 
     def load_scale(self) -> float:

@@ -17,14 +17,13 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
+from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
 from femcontact.errors import InputError
 from femcontact.physics.rigid_body import RigidBody, mass_properties
 from femcontact.physics.rotation import rotation_numpy
 
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
-DEFORMABLE = {"peg": "hole", "hole": "peg", "indenter": "block"}
-"""The deformable body for each choice of rigid body (a snap fit's pin mates with `spring`)."""
 
 
 class Forms(SimpleNamespace):
@@ -46,7 +45,7 @@ class Problem:
         if not model.supports:
             raise InputError(f"rigid = {scene['rigid']!r}: the deformable body has no support; "
                              "hold it (e.g. make the peg the rigid body)")
-        self.deformable = "spring" if scene["geometry"] == "snap_fit" else DEFORMABLE[scene["rigid"]]
+        self.deformable = deformable_body(scene)
         degree = scene["mesh"]["degree"]
         self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", degree))
         self.u = fem.Function(self.V, name="displacement")
@@ -77,9 +76,10 @@ class Problem:
         self.forms = self._compile()
 
     # -- what effects call while they build ----------------------------------------------
-    def add_bulk(self, integrand) -> None:
-        """A term of R_u integrated over the deformable body (N/mm^3 . test function)."""
-        self._bulk.append(integrand * self.dx)
+    def add_bulk(self, integrand, dx=None) -> None:
+        """A term of R_u integrated over the deformable body (N/mm^3 . test function), by
+        `dx` if the term needs its own quadrature rule (a state kept at quadrature points)."""
+        self._bulk.append(integrand * (dx or self.dx))
 
     def add_traction(self, traction) -> None:
         """A traction (MPa) the rigid body exerts on the contact surface."""

@@ -97,10 +97,11 @@ def test_each_effect_is_one_module_with_one_effect_class():
     from femcontact import effects
     from femcontact.effects.base import Effect
 
-    classes = list(effects.ALWAYS) + list(effects.NAMED.values()) + list(effects.BY_SHAPE)
+    named = {**effects.MATERIAL, **effects.NAMED}
+    classes = list(effects.ALWAYS) + list(named.values()) + list(effects.BY_SHAPE)
     assert all(issubclass(cls, Effect) for cls in classes)
     assert len({cls.__module__ for cls in classes}) == len(classes)
-    assert {cls.name for cls in effects.NAMED.values()} == set(effects.NAMED)
+    assert {cls.name for cls in named.values()} == set(named)
     for path in (ROOT / "femcontact" / "effects").glob("*.py"):
         if path.stem in ("__init__", "base"):
             continue
@@ -115,7 +116,7 @@ def test_named_effects_are_the_scene_effects_that_build_terms():
     from femcontact.config.scene import EFFECTS
 
     law_choices = {"large_strain", "plane_strain", "plane_stress"}  # select the elastic law (effects/elasticity.py)
-    assert set(EFFECTS) == set(effects.NAMED) | law_choices
+    assert set(EFFECTS) == set(effects.MATERIAL) | set(effects.NAMED) | law_choices
 
 
 def test_scene_page_is_generated_from_the_schema():

@@ -101,3 +101,29 @@ def test_compliant_support_is_built_only_when_named():
         assert ("compliant_support" in p.built) == built
         p.rigid.values[:] = [0.01, 0.0, 0.0]
         assert p.rigid_residual(None)[0] == pytest.approx(scene["support"]["kx"] * 0.01 if built else 0.0)
+
+
+def test_plasticity_is_built_only_when_named_and_keeps_its_state_at_quadrature_points():
+    """Named: built right after elasticity (contact reads its stress), the plastic strain and
+    PEEQ become history, the bulk stiffness depends on the state (no factor-once bulk) and the
+    rows gain max_peeq and plastic_zone; not named: none of it."""
+    elastic, plastic = problem(["plane_strain"]), problem(["plane_strain", "plasticity"])
+    assert "plasticity" not in elastic.built and elastic.forms.jacobian_bulk is not None
+    assert plastic.built[:3] == ["elasticity", "plasticity", "contact"]
+    assert {"plasticity.plastic_strain", "plasticity.PEEQ"} <= history(plastic)
+    assert plastic.forms.jacobian_bulk is None
+    plastic_effect = plastic.components[1]
+    assert plastic_effect.outputs() == {"max_peeq": 0.0, "plastic_zone": 0.0}
+    # a uniform shear strain gamma past yield (E = 1000, nu = 0.25: mu = 400, yield 210 MPa at
+    # q = sqrt(3) mu gamma, perfectly plastic): the whole block flows, PEEQ = (gamma - gamma_y)/sqrt(3)
+    gamma = 1.0
+    plastic.u.interpolate(lambda x: np.vstack([gamma * x[1], 0 * x[0]]))
+    gamma_y = 210.0 / (np.sqrt(3) * 400.0)
+    out = plastic_effect.outputs()
+    assert out["max_peeq"] == pytest.approx((gamma - gamma_y) / np.sqrt(3), rel=1e-12)
+    assert out["plastic_zone"] == pytest.approx(4.0 * 2.0, rel=1e-12)
+    before = plastic.state()
+    plastic_effect.commit(0.0)
+    assert plastic.components[1].quadrature.peeq.x.array.max() > 0
+    plastic.restore(before)
+    assert plastic.components[1].quadrature.peeq.x.array.max() == 0.0
