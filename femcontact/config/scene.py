@@ -369,10 +369,9 @@ def _factorization_available(package: str) -> bool:
 
 
 def resolve(data: dict, overrides=()) -> dict:
-    """Validate raw scene data (plus 'key=value' overrides) and return the resolved scene."""
+    """Validate raw scene data (plus overrides) and return the resolved scene."""
     data = json.loads(json.dumps(data))  # deep copy, plain types
-    for text in overrides:
-        set_key(data, *parse_assignment(text))
+    apply_overrides(data, overrides)
     kind = data.get("kind", "contact")
     if kind == "rcc":
         from femcontact.rcc import device as rcc
@@ -447,8 +446,16 @@ def read_toml(path) -> dict:
         raise InputError(f"{path}: not valid TOML: {error}") from None
 
 
+def apply_overrides(data: dict, overrides=()) -> None:
+    """Set dotted keys in raw scene data: `overrides` is a {key: value} dict or a sequence of
+    'key=value' texts (--set, the value read as TOML) and (key, value) pairs."""
+    items = overrides.items() if isinstance(overrides, dict) else overrides
+    for item in items:
+        set_key(data, *(parse_assignment(item) if isinstance(item, str) else item))
+
+
 def load_scene(path, overrides=()) -> dict:
-    """Read, override and validate a scene file."""
+    """Read, override (see `apply_overrides`) and validate a scene file."""
     try:
         return resolve(read_toml(path), overrides)
     except InputError as error:

@@ -33,8 +33,8 @@ from pathlib import Path
 
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
-from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
-from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.config.schema import Field, TableList, set_key, validate
+from femcontact.config.scene import apply_overrides, case_id, read_toml, resolve
 from femcontact.study.workers import Pool, Worker
 
 _TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
@@ -214,8 +214,7 @@ def load_study(path, overrides=(), results_root="results") -> Study:
     base = read_toml(path.parent / settings["scene"])
     for key, value in flatten(raw["scene"]).items():
         set_key(base, key, value)
-    for text in overrides:  # --set changes the base scene; the sweep still varies its own keys
-        set_key(base, *parse_assignment(text))
+    apply_overrides(base, overrides)  # --set changes the base scene; the sweep still varies its own keys
     results = Path(results_root) / settings["name"]
     cases, problems, seen = [], [], set()
     for params in expand(raw["sweep"]):
