@@ -202,7 +202,10 @@ DYNAMICS = {
 }
 
 OUTPUTS = {
-    "fields": Field("bool", False, "write displacement, von Mises and contact pressure to XDMF"),
+    "fields": Field("bool", False, "write a ParaView time series, one frame per converged increment: fields.xdmf "
+                    "(displacement, von Mises, stress, contact pressure, tangential traction, contact status, "
+                    "slip since the step began, gap) and rigid.xdmf (the rigid body's outline or surface)"),
+    "every": Field("int", 1, "with `fields`: write every N-th increment and the last of each step", min=1),
 }
 
 
