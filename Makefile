@@ -12,7 +12,7 @@ RANKS ?= 2
 
 APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
 	python3-meshio python3-h5py python3-pytest python3-venv python3-pip python3-matplotlib \
-	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6
+	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6 ffmpeg
 PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
 
 # Open MPI refuses to run as root unless told; harmless otherwise.
