@@ -415,7 +415,7 @@ def _resolve_dislodging(data: dict) -> dict:
 
 
 def _resolve_dislodging_beyond(data: dict) -> dict:
-    """A dislodging_beyond scene (issue 14): a 2-D or 3-D peg-in-hole contact scene plus its
+    """A dislodging_beyond scene: a 2-D or 3-D peg-in-hole contact scene plus its
     [dislodging] table (config/dislodging_beyond.py)."""
     from femcontact.config import dislodging_beyond
 

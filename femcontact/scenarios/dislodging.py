@@ -1,4 +1,4 @@
-"""Dislodging a wedged peg by pulling (reference §2, thesis ch. 4; issue 13).
+"""Dislodging a wedged peg by pulling (the thesis, ch. 4).
 
 A scene of kind "dislodging" is a 2-D peg-in-hole contact scene whose first two steps
 wedge the peg (quasi-static) and whose steps 3-4 pull and observe; its `[dislodging]`
@@ -300,7 +300,7 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
                "one_dof_first_slip_N": puller.one_dof["first_slip"], "one_dof_full_slide_N": puller.one_dof["full_slide"],
                "peg_mass_t": float(sim.problem.rigid.mass), "wedge_time_s": puller.wedge_time,
                **puller.pullout, "pullout_time_s": puller.pullout_time,
-               "degree_of_wedging": puller.pullout["quasi_static_pullout_N"]  # issue 14: P / (mu (N_A + N_B))
+               "degree_of_wedging": puller.pullout["quasi_static_pullout_N"]  # P / (mu (N_A + N_B))
                / (scene["contact"]["mu"] * (puller.contacts["N_A"] + puller.contacts["N_B"]))}
     info = {"dofs": sim.dofs, "effects": list(scene["effects"]), "built": sim.problem.built,
             "newton_iterations": int(sum(row["newton_iterations"] for row in sim.history))}
