@@ -49,11 +49,13 @@ def command(args) -> int:
     columns = headline_columns(study, columns, rows)
     plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
+    family = []  # the family's own tables, before the per-case table
     if study.cases and study.cases[0].scene.get("kind") == "dislodging":
         from femcontact.scenarios import dislodging
 
         plots += dislodging.report(study)
-    document = summary(study, columns, rows, plots, snapshots)
+        family = dislodging.summary_blocks(study)
+    document = summary(study, columns, rows, plots, snapshots, family)
     markdown = write_markdown(document, study.results / "summary.md")
     page = write_html(document, study.results / "index.html", f"Study {study.settings['name']}")
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
@@ -66,21 +68,40 @@ def command(args) -> int:
     return 0
 
 
+RUN_COLUMNS = ("status", "reason", "case_id", "wall", "wall_time_s", "dofs", "ranks")
+"""Columns about the run rather than its answer or its inputs: last in the summary table."""
+
+
 def headline_columns(study, csv_columns: list[str], rows: list[dict]) -> list[str]:
-    """The summary table's columns: [report] columns (each checked against the results), or the
-    default: case id, swept keys, status, the family's primary metrics, wall time (and the failure
-    reason when a case failed), at most MAX_COLUMNS."""
+    """The summary table's columns, the answer first (`answer_first`): [report] columns (each checked
+    against the results), or the default: the family's primary metrics, the swept keys, status, case
+    id, wall time (and the failure reason when a case failed), at most MAX_COLUMNS."""
     declared = study.report.get("columns") or []
     if declared:
         for name in declared:
             if rows and name not in csv_columns and all(get_key(row["scene"], name) is None for row in rows):
                 raise InputError(f"{study.path}: [report] columns: {name!r} is neither a column of results.csv "
                                  f"nor a scene key (columns: {', '.join(csv_columns)})")
-        return list(declared)
+        return answer_first(list(declared), study.keys, rows)
     failed = any(row["status"] != "ok" for row in rows)
-    default = ["case_id", *study.keys, "status", *units.primary_metrics(csv_columns), "wall"] + \
+    default = [*units.primary_metrics(csv_columns), *study.keys, "status", "case_id", "wall"] + \
         (["reason"] if failed else [])
-    return list(dict.fromkeys(default))[:MAX_COLUMNS]
+    return answer_first(list(dict.fromkeys(default))[:MAX_COLUMNS], study.keys, rows)
+
+
+def answer_first(columns: list[str], keys: list[str], rows: list[dict]) -> list[str]:
+    """The columns in three groups, each in its given order: results (metrics), then inputs (swept
+    keys and other scene keys), then the run's bookkeeping (RUN_COLUMNS, time.PHASE)."""
+    def group(name: str) -> int:
+        if name in RUN_COLUMNS or name.startswith("time."):
+            return 2
+        if name in keys:
+            return 1
+        if any(name in row or f"metric.{name}" in row for row in rows):  # a metric
+            return 0
+        return 1 if any(get_key(row["scene"], name) is not None for row in rows) else 0
+
+    return sorted(columns, key=group)
 
 
 def column(row: dict, name: str):
@@ -333,9 +354,9 @@ def _matches(scene: dict, selector: dict) -> bool:
     return all(same(get_key(scene, key), value) for key, value in selector.items())
 
 
-def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> list[tuple]:
+def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=()) -> list[tuple]:
     """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
-    written as Markdown and as HTML."""
+    written as Markdown and as HTML; `family`: the study family's own blocks, before the case table."""
     ok = sum(row["status"] == "ok" for row in rows)
     blocks = [("h1", f"Study {study.settings['name']}")]
     if study.settings["description"]:
@@ -347,6 +368,9 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> li
         commits = sorted({str(row.get("git_commit")) for row in rows})
         blocks.append(("p", f"Code: git {', '.join(commits)}; dolfinx {rows[0].get('dolfinx')}, "
                             f"python {rows[0].get('python')}."))
+        blocks += list(family)
+        if family:
+            blocks.append(("h2", "Cases"))
         blocks.append(("table", [units.label(c) for c in columns],
                        [[_cell(column(row, c), c) for c in columns] for row in rows]))
     blocks += wedge_table(rows)
