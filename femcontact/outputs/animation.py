@@ -4,12 +4,13 @@ One picture per frame of `fields.xdmf` (a run with `outputs.fields = true`): on 
 deformable body, displaced (x `scale`) and coloured by von Mises stress, with the rigid body
 (`rigid.xdmf`, its outline in 2-D, its surface in 3-D) displaced with it; on the right the forces
 of `history.csv` against time, a marker at the frame's time. Written as CASE_DIR/animation.mp4
-(H.264 through ffmpeg) and CASE_DIR/animation.gif. The colour range is fixed for the whole film:
+(H.264 through ffmpeg) and CASE_DIR/animation.gif, each written whole or not at all. The colour range is fixed for the whole film:
 from 0 to the 99th percentile of von Mises over all frames' cells (a sharp corner's singular
 peak would otherwise leave the rest in the lowest colour); higher values take the top colour.
 2-D pictures are drawn by matplotlib, 3-D ones rendered off-screen by pyvista.
 """
 import csv
+import os
 import shutil
 from pathlib import Path
 
@@ -126,9 +127,18 @@ def _write(case_dir, frames, rigid, history, forces, draw, limits, scale, fps) -
         return []
 
     film = animation.FuncAnimation(figure, frame, frames=len(frames), blit=False)
-    paths = [case_dir / "animation.mp4", case_dir / "animation.gif"]
-    film.save(paths[0], writer=animation.FFMpegWriter(fps=fps, codec="libx264", extra_args=["-pix_fmt", "yuv420p"]))
-    film.save(paths[1], writer=animation.PillowWriter(fps=fps))
+    writers = {".mp4": animation.FFMpegWriter(fps=fps, codec="libx264", extra_args=["-pix_fmt", "yuv420p"]),
+               ".gif": animation.PillowWriter(fps=fps)}
+    paths = []
+    for suffix, writer in writers.items():  # each written whole under a temporary name, then renamed
+        path = case_dir / f"animation{suffix}"
+        temporary = path.with_name(f".animation.{os.getpid()}.tmp{suffix}")
+        try:
+            film.save(temporary, writer=writer)
+            os.replace(temporary, path)
+        finally:
+            temporary.unlink(missing_ok=True)
+        paths.append(path)
     plt.close(figure)
     return paths
 

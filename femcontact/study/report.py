@@ -1,10 +1,12 @@
 """`femcontact report STUDY.toml`: plots, stress snapshots and a summary of a study.
 
 Everything goes to results/NAME/: the plots the study declares ([[plot]], PNG),
-snapshots/CASE_ID.png for the cases [snapshots] selects, and the summary twice, as
+snapshots/CASE_ID.png for the cases [snapshots] selects, animations/CASE_ID.mp4 and .gif
+(`femcontact animate`) for the cases [animation] selects, and the summary twice, as
 summary.md and index.html (the same table and pictures, for a browser). The table shows
-the headline columns ([report] columns, or by default case id, swept keys, status, the
-family's primary metrics and wall time; labels with units from femcontact.study.units); every
+the headline columns ([report] columns, or by default the family's primary metrics, swept
+keys, status, case id and wall time), the answer first; labels with units from
+femcontact.study.units; every
 column is in results.csv and results.sqlite. The database is rebuilt from the case
 directories first, so the report shows exactly what is on disk.
 """
@@ -21,7 +23,7 @@ from pathlib import Path
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.study import units
-from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study
+from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, matches
 
 
 def add_arguments(parser):
@@ -49,13 +51,14 @@ def command(args) -> int:
     columns = headline_columns(study, columns, rows)
     plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
+    films = write_animations(study, {row["case_id"]: row for row in rows})
     family = []  # the family's own tables, before the per-case table
     if study.cases and study.cases[0].scene.get("kind") == "dislodging":
         from femcontact.scenarios import dislodging
 
         plots += dislodging.report(study)
         family = dislodging.summary_blocks(study)
-    document = summary(study, columns, rows, plots, snapshots, family)
+    document = summary(study, columns, rows, plots, snapshots, family, films)
     markdown = write_markdown(document, study.results / "summary.md")
     page = write_html(document, study.results / "index.html", f"Study {study.settings['name']}")
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
@@ -65,6 +68,8 @@ def command(args) -> int:
         print(f"  plot:      {path}")
     for path in snapshots:
         print(f"  snapshot:  {path}")
+    for path in films:
+        print(f"  animation: {path}")
     return 0
 
 
@@ -323,7 +328,7 @@ def write_snapshots(study, rows: dict) -> list[Path]:
 
     settings, paths = study.snapshots, []
     for case in study.cases:
-        if not any(_matches(case.scene, flatten(selector)) for selector in settings["select"]):
+        if not any(matches(case.scene, flatten(selector)) for selector in settings["select"]):
             continue
         if case.id not in rows or rows[case.id]["status"] != "ok":
             print(f"  (no snapshot of {case.id}: no ok result)", file=sys.stderr)
@@ -345,18 +350,30 @@ def write_snapshots(study, rows: dict) -> list[Path]:
     return paths
 
 
-def _matches(scene: dict, selector: dict) -> bool:
-    def same(a, b):
-        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-            return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)
-        return a == b
+def write_animations(study, rows: dict) -> list[Path]:
+    """Films (MP4, and a GIF for summary.md) of the ok cases [animation] selects, in animations/;
+    a case without a time series is skipped with a note."""
+    from femcontact.outputs.animation import animate
 
-    return all(same(get_key(scene, key), value) for key, value in selector.items())
+    paths = []
+    for case in study.cases:
+        if not any(matches(case.scene, flatten(selector)) for selector in study.animation.get("select", [])):
+            continue
+        if case.id not in rows or rows[case.id]["status"] != "ok" or not (case.dir / "fields.xdmf").exists():
+            print(f"  (no animation of {case.id}: no ok result with fields.xdmf)", file=sys.stderr)
+            continue
+        folder = make_dir(study.results / "animations")
+        for made in animate(case.dir, scale=study.animation["scale"]):
+            path = folder / f"{case.id}{made.suffix}"
+            os.replace(made, path)
+            paths.append(path)
+    return paths
 
 
-def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=()) -> list[tuple]:
+def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=(), films=()) -> list[tuple]:
     """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
-    written as Markdown and as HTML; `family`: the study family's own blocks, before the case table."""
+    ("video", MP4 path, GIF path, caption), written as Markdown and as HTML; `family`: the study
+    family's own blocks, before the case table; `films`: the animations' MP4 and GIF paths."""
     ok = sum(row["status"] == "ok" for row in rows)
     blocks = [("h1", f"Study {study.settings['name']}")]
     if study.settings["description"]:
@@ -380,8 +397,13 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots, famil
     if plots:
         blocks.append(("h2", "Plots"))
         blocks += [("img", p.name, p.stem) for p in plots]
+    by_id = {case.id: case for case in study.cases}
+    if films:
+        blocks.append(("h2", "Animations"))
+        blocks += [("video", f"animations/{p.name}", f"animations/{p.stem}.gif", f"case {p.stem}: " + "; ".join(
+            units.value_label(k, v) for k, v in by_id[p.stem].params.items()) + " (von Mises stress, both bodies, "
+            "forces against time)") for p in films if p.suffix == ".mp4"]
     if snapshots:
-        by_id = {case.id: case for case in study.cases}
         blocks.append(("h2", "Stress snapshots"))
         blocks += [("img", f"snapshots/{p.name}", f"case {p.stem}: " + "; ".join(
             units.value_label(k, v) for k, v in by_id[p.stem].params.items())) for p in snapshots]
@@ -400,6 +422,8 @@ def write_markdown(blocks: list[tuple], path: Path) -> Path:
             header, body = content
             lines += ["| " + " | ".join(map(_markdown, header)) + " |", "|" + "---|" * len(header)]
             lines += ["| " + " | ".join(map(_markdown, cells)) + " |" for cells in body] + [""]
+        elif kind == "video":
+            lines += [f"[![{content[2]}]({content[1]})]({content[0]})", ""]
         else:
             lines += [f"![{content[1]}]({content[0]})", ""]
     write_text_atomic(path, "\n".join(lines).rstrip() + "\n")
@@ -434,6 +458,11 @@ def write_html(blocks: list[tuple], path: Path, title: str) -> Path:
                     f"<td>{html.escape(c)}</td>" if _numeric_text(c) else f'<td class="text">{html.escape(c)}</td>'
                     for c in cells) + "</tr>")
             parts.append("</tbody></table></div>")
+        elif kind == "video":
+            video, gif, caption = content
+            parts.append(f'<figure><video src="{html.escape(video)}" controls loop muted preload="metadata" '
+                         f'style="max-width: 100%"><img src="{html.escape(gif)}" alt="{html.escape(caption)}">'
+                         f"</video><figcaption>{html.escape(caption)}</figcaption></figure>")
         else:
             source, caption = content
             parts.append(f'<figure><img src="{html.escape(source)}" alt="{html.escape(caption)}">'

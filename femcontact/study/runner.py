@@ -21,6 +21,7 @@ import fcntl
 import functools
 import itertools
 import json
+import math
 import os
 import select
 import shlex
@@ -90,6 +91,14 @@ SCHEMA = {
                       else "expected a name or [x, y(, z), radius]"),
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
+    },
+    "animation": {
+        "select": Field("any", [], "cases filmed in the report (femcontact animate), as [snapshots] selects them; "
+                        "they run with outputs.fields = true",
+                        check=lambda v: None if isinstance(v, list) and all(isinstance(t, dict) and t for t in v)
+                        else "must be an array of non-empty tables"),
+        "scale": Field("float", 1.0, "displacement magnification of the films", min=0.0),
+        "every": Field("int", 1, "film every N-th increment (outputs.every of the filmed cases)", min=1),
     },
     "report": {
         "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
@@ -171,6 +180,7 @@ class Study:
     plots: list = field(default_factory=list)
     snapshots: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
+    animation: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -223,6 +233,8 @@ def load_study(path, overrides=(), results_root="results") -> Study:
             for key, value in params.items():
                 set_key(data, key, value)
             scene = resolve(data)
+            if "outputs" in scene and any(matches(scene, flatten(t)) for t in raw["animation"]["select"]):
+                scene["outputs"].update(fields=True, every=raw["animation"]["every"])  # filmed in the report
         except InputError as error:
             problems.append(f"case {_describe(params)}: {error}")
             continue
@@ -237,7 +249,18 @@ def load_study(path, overrides=(), results_root="results") -> Study:
         case.params = {key: get_key(case.scene, key) for key in keys}
     if settings["shared_steps"]:
         _attach_prefixes(cases, settings["shared_steps"], results)
-    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"])
+    return Study(path, settings, cases, keys, results, raw["plot"], raw["snapshots"], raw["report"],
+                 raw["animation"])
+
+
+def matches(scene: dict, selector: dict) -> bool:
+    """Does the scene have every dotted key of `selector` at its value (numbers to 1e-9)?"""
+    def same(a, b):
+        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)
+        return a == b
+
+    return all(same(get_key(scene, key), value) for key, value in selector.items())
 
 
 def _attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
