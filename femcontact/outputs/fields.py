@@ -116,8 +116,7 @@ class FieldSeries:
         tangential = traction - ufl.dot(traction, normal) * normal
         friction = [component for component in p.components if component.name == "friction"]
         stick_slip = list(friction[0].nodal_outputs().values()) if friction else [0.0, 0.0]
-        active = ufl.conditional(ufl.gt(contact.pressure, 0), 1.0, 0.0)
-        values = [contact.pressure, contact.gap, active, *stick_slip, *[tangential[k] for k in range(dim)],
+        values = [contact.pressure, contact.gap, *stick_slip, *[tangential[k] for k in range(dim)],
                   *[contact.xi[k] for k in range(dim)], *[contact.normal_local[k] for k in range(dim)], 1.0]
         self.friction = bool(friction)
         self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
@@ -171,12 +170,14 @@ class FieldSeries:
         values = self.nodal.x.array[: self.n_owned * k].reshape(-1, k)
         area = values[:, -1:]
         lumped = np.where(area > 0, values / np.where(area > 0, area, 1.0), 0.0)
-        pressure, gap, active, stick, slip = lumped[:, :5].T
-        tangential, xi, normal = np.split(lumped[:, 5:-1], 3, axis=1)
-        status = np.where(active > 0.5, np.where(self.friction & (stick > slip), 1.0, 2.0), 0.0)
+        pressure, gap, stick, slip = lumped[:, :4].T
+        tangential, xi, normal = np.split(lumped[:, 4:-1], 3, axis=1)
+        # touching: a positive lumped pressure (with quadratic elements or in 3-D the contact is integrated at
+        # Gauss points, so a node at the edge of the contact zone may be touched on a part of its patch only)
+        status = np.where(pressure > 0, np.where(self.friction & (stick > slip), 1.0, 2.0), 0.0)
         normal = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
         return {"contact_pressure": pressure, "gap": gap, "contact_status": status,
-                "tangential_traction": _pad(tangential), "xi": xi, "normal": normal, "on_surface": area[:, 0] > 0}
+                "tangential_traction": _pad(tangential), "xi": xi, "normal": normal}
 
     def capture(self) -> None:
         """The contact values of a converged increment, read before it is committed (committing
