@@ -11,8 +11,8 @@ SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 RANKS ?= 2
 
 APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
-	python3-meshio python3-pytest python3-venv python3-pip python3-matplotlib \
-	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6
+	python3-meshio python3-h5py python3-pytest python3-venv python3-pip python3-matplotlib \
+	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6 ffmpeg
 PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
 
 # Open MPI refuses to run as root unless told; harmless otherwise.
@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -81,6 +81,35 @@ test-slurm: setup $(STAMPS)/apt-slurm
 	  echo "== one-node SLURM in $$cluster"; \
 	  $(SUDO) tests/slurm/cluster.sh start $$cluster && source $$cluster/env && \
 	  PYTHONPATH=$(CURDIR)$${PYTHONPATH:+:$$PYTHONPATH} timeout 900 $(PY) -m pytest -q -p no:cacheprovider tests/slurm
+
+# ParaView itself reads the time series (not part of `make test`): Debian's paraview (pvbatch, with
+# python3-paraview) under a virtual X server (xvfb), on a 2-D and a 3-D wedging case written with
+# outputs.fields = true; tests/paraview/check_series.py checks frames and arrays and renders the last
+# frame to results/paraview/*.png.
+PARAVIEW_APT_PACKAGES := paraview python3-paraview xvfb xauth
+
+$(STAMPS)/apt-paraview: Makefile
+	@mkdir -p $(STAMPS)
+	@if [ "$$(dpkg-query -W -f='$${Status}\n' $(PARAVIEW_APT_PACKAGES) 2>/dev/null | grep -c 'install ok installed')" \
+	    -lt "$(words $(PARAVIEW_APT_PACKAGES))" ]; then \
+	  echo "== installing ParaView (Debian packages)"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(PARAVIEW_APT_PACKAGES); \
+	fi
+	@touch $@
+
+PARAVIEW_CASES := wedging_2d wedging_3d
+
+test-paraview: setup $(STAMPS)/apt-paraview
+	@mkdir -p results/paraview
+	@for scene in $(PARAVIEW_CASES); do \
+	  $(FEMCONTACT) run scenes/$$scene.toml --quiet --set mesh.resolution=0.5 --set outputs.fields=true \
+	    --out results/paraview/$$scene || exit $$?; \
+	  frames=$$(($$(wc -l < results/paraview/$$scene/history.csv) - 1)); \
+	  xvfb-run -a -s "-screen 0 1280x1024x24" pvbatch tests/paraview/check_series.py \
+	    results/paraview/$$scene $$frames results/paraview/$$scene.png 2>&1 | grep '^check_series' ; \
+	  [ "$${PIPESTATUS[0]}" = 0 ] || exit 1; \
+	done
 
 study: $(DEFAULT_STUDY)
 

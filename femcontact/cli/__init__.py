@@ -16,9 +16,10 @@ COMMANDS = {
     "run": ("femcontact.cli.run", "run one scene and write its results"),
     "study": ("femcontact.study.command", "run the cases of a study that are not done yet"),
     "report": ("femcontact.study.report", "write the plots, snapshots and summary of a study"),
+    "animate": ("femcontact.outputs.animation", "film of a run (MP4 and GIF): stress, both bodies, forces"),
     "rcc": ("femcontact.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
     "whitney": ("femcontact.cli.whitney", "compliantly supported rigid-peg insertion (Whitney), analytic"),
-    "hertz": ("femcontact.cli.hertz", "Hertz benchmark (reference §5) at one contact-zone size"),
+    "hertz": ("femcontact.cli.hertz", "Hertz benchmark (docs/references.md) at one contact-zone size"),
 }
 
 

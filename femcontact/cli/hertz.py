@@ -1,4 +1,4 @@
-"""`femcontact hertz`: the Hertz benchmark (reference §5) at one contact-zone size, for timing
+"""`femcontact hertz`: the Hertz benchmark (docs/references.md) at one contact-zone size, for timing
 against other codes.
 
     femcontact hertz --contact-size H [--degree 1|2] [--ranks N] [--json]

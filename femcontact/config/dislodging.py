@@ -5,7 +5,7 @@ from femcontact.config.schema import Field
 from femcontact.errors import InputError
 
 DISLODGING = {
-    "case": Field("int", 1, "thesis case number (reference §2: 1 = l_d 7, 1000 N*mm; 2 = l_d 8, 1500 N*mm)", min=1),
+    "case": Field("int", 1, "thesis case number (the thesis, ch. 4: 1 = l_d 7, 1000 N*mm; 2 = l_d 8, 1500 N*mm)", min=1),
     "method": Field("str", "continuous", "'continuous' (constant pull) or 'pulse' (triangle train, one per period)",
                     choices=("continuous", "pulse")),
     "pulse_hz": Field("float", 50.0, "pulse frequency (Hz), method 'pulse'", positive=True),

@@ -1,4 +1,4 @@
-"""Schema of a scene of kind "dislodging_beyond" (femcontact.scenarios.dislodging_beyond, issue 14):
+"""Schema of a scene of kind "dislodging_beyond" (femcontact.scenarios.dislodging_beyond):
 a peg-in-hole contact scene whose first two steps wedge the peg (2-D as in kind "dislodging",
 or the 3-D single-hole cylinder), plus a `[dislodging]` table: every key of kind "dislodging"
 and the keys below, which say what one study case does from the wedged state."""

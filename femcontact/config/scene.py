@@ -247,7 +247,10 @@ PLASTICITY = {
 }
 
 OUTPUTS = {
-    "fields": Field("bool", False, "write displacement, von Mises and contact pressure to XDMF"),
+    "fields": Field("bool", False, "write a ParaView time series, one frame per converged increment: fields.xdmf "
+                    "(displacement, von Mises, stress, contact pressure, tangential traction, contact status, "
+                    "slip since the step began, gap) and rigid.xdmf (the rigid body's outline or surface)"),
+    "every": Field("int", 1, "with `fields`: write every N-th increment and the last of each step", min=1),
 }
 
 
@@ -432,10 +435,9 @@ def _factorization_available(package: str) -> bool:
 
 
 def resolve(data: dict, overrides=()) -> dict:
-    """Validate raw scene data (plus 'key=value' overrides) and return the resolved scene."""
+    """Validate raw scene data (plus overrides) and return the resolved scene."""
     data = json.loads(json.dumps(data))  # deep copy, plain types
-    for text in overrides:
-        set_key(data, *parse_assignment(text))
+    apply_overrides(data, overrides)
     kind = data.get("kind", "contact")
     if kind == "rcc":
         from femcontact.rcc import device as rcc
@@ -476,7 +478,7 @@ def _resolve_dislodging(data: dict) -> dict:
 
 
 def _resolve_dislodging_beyond(data: dict) -> dict:
-    """A dislodging_beyond scene (issue 14): a 2-D or 3-D peg-in-hole contact scene plus its
+    """A dislodging_beyond scene: a 2-D or 3-D peg-in-hole contact scene plus its
     [dislodging] table (config/dislodging_beyond.py)."""
     from femcontact.config import dislodging_beyond
 
@@ -510,8 +512,16 @@ def read_toml(path) -> dict:
         raise InputError(f"{path}: not valid TOML: {error}") from None
 
 
+def apply_overrides(data: dict, overrides=()) -> None:
+    """Set dotted keys in raw scene data: `overrides` is a {key: value} dict or a sequence of
+    'key=value' texts (--set, the value read as TOML) and (key, value) pairs."""
+    items = overrides.items() if isinstance(overrides, dict) else overrides
+    for item in items:
+        set_key(data, *(parse_assignment(item) if isinstance(item, str) else item))
+
+
 def load_scene(path, overrides=()) -> dict:
-    """Read, override and validate a scene file."""
+    """Read, override (see `apply_overrides`) and validate a scene file."""
     try:
         return resolve(read_toml(path), overrides)
     except InputError as error:

@@ -19,6 +19,7 @@ class Recorder:
 
     def __init__(self, problem, newton):
         self.problem, self.newton = problem, newton
+        self.observers = []  # called after each row, while the increment's state is not yet committed
         p, comm = problem, problem.mesh.comm
         self.comm = comm
         self.energy = fem.form(p.energy_density * p.dx)
@@ -145,6 +146,8 @@ class Recorder:
         row["max_von_mises"] = self._max(float(self.von_mises.x.array[:n].max(initial=0.0)))
         row["yielded"] = bool(row["max_von_mises"] > p.scene["materials"][p.deformable]["yield_stress"])
         row["stabilization_force"] = stabilization_force
+        for observe in self.observers:
+            observe()
         return row
 
 

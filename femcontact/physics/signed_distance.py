@@ -136,3 +136,33 @@ def outline(rigid: dict, points: int = 64) -> np.ndarray:
     else:
         return np.zeros((0, 3))
     return np.c_[xy, np.zeros(len(xy))]
+
+
+def surface(rigid: dict, points: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    """Triangulated surface (vertices P x 3 in the local frame about the reference point, triangles
+    T x 3) of a 3-D shape, for pictures: a cylinder with its end caps, the indenter's cylinder
+    (axis y, 4 radii long), the snap-fit pin's section swept over z = +-half_width; empty for others."""
+    shape = rigid["shape"]
+    if shape in ("cylinder", "cylinder_y"):
+        radius = rigid["radius"]
+        half = rigid["length"] / 2 if shape == "cylinder" else 2 * radius
+        angle = np.linspace(0, 2 * np.pi, points, endpoint=False)
+        ring = radius * np.c_[np.cos(angle), np.sin(angle)]
+        vertices = np.vstack([np.c_[ring, np.full(points, -half)], np.c_[ring, np.full(points, half)],
+                              [[0, 0, -half], [0, 0, half]]])
+        if shape == "cylinder_y":  # local axis y: (x, y, z) <- (x, z_cylinder, y_cylinder)
+            vertices = vertices[:, [0, 2, 1]]
+        k, k1 = np.arange(points), (np.arange(points) + 1) % points
+        triangles = np.vstack([np.c_[k, k1, points + k], np.c_[k1, points + k1, points + k],
+                               np.c_[np.full(points, 2 * points), k1, k],
+                               np.c_[np.full(points, 2 * points + 1), points + k, points + k1]])
+        return vertices, triangles
+    if shape == "pin":
+        from geometry.snap_fit import outline as pin_outline
+
+        section = pin_outline(rigid["pieces"])
+        n, half = len(section), rigid["half_width"]
+        vertices = np.vstack([np.c_[section, np.full(n, -half)], np.c_[section, np.full(n, half)]])
+        k = np.arange(n - 1)
+        return vertices, np.vstack([np.c_[k, k + 1, n + k], np.c_[k + 1, n + k + 1, n + k]])
+    return np.zeros((0, 3)), np.zeros((0, 3), dtype=int)

@@ -1,4 +1,4 @@
-"""Remote-centre-compliance (RCC) device as a 3-D truss (reference §3).
+"""Remote-centre-compliance (RCC) device as a 3-D truss (the thesis, ch. 5).
 
 An inverted Gough-Whitehall-Stewart platform: base joints A, B, C, wrist joints
 M, N, P, Q, R, S, six double-acting spring links of axial stiffness k (N/mm):

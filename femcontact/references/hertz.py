@@ -1,4 +1,4 @@
-"""Hertz line contact (reference §5): the analytic half-space solution and the benchmark's data.
+"""Hertz line contact (docs/references.md): the analytic half-space solution and the benchmark's data.
 
 Rigid cylinder of radius R pressed with P (N per mm of thickness) into a plane-strain
 elastic block: E* = E / (1 - nu^2), a = sqrt(4 P R / (pi E*)), p0 = 2 P / (pi a).
@@ -17,6 +17,6 @@ def analytic(P: float, R: float, E: float, nu: float) -> tuple[float, float]:
 
 
 def benchmark_half_width() -> float:
-    """a (mm) of the reference §5 benchmark: 0.380567 mm."""
+    """a (mm) of the Hertz benchmark (docs/references.md): 0.380567 mm."""
     b = BENCHMARK
     return analytic(b["P"], b["R"], b["E"], b["nu"])[0]

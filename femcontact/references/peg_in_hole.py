@@ -1,4 +1,4 @@
-"""Closed-form peg-in-hole relations (reference §1 and §4; Simunovic, Whitney).
+"""Closed-form peg-in-hole relations (the thesis, ch. 3; Whitney, Mechanical Assemblies ch. 10; Simunovic).
 
 The two-point geometry lives in `geometry.two_point` (placement needs it and geometry
 imports nothing from femcontact); the friction-dependent wedging bounds live here.

@@ -9,7 +9,7 @@ friction cones, as wrenches; non-negative least squares decides. Both bodies are
 elastic deformation moves the contacts by micrometres and is ignored, and so is a wedged
 peg's preload (which can hold loads beyond this limit).
 
-For the peg-in-hole placement of reference §1 (geometry.placement, 'two_point'), contact A
+For the peg-in-hole placement of the thesis, ch. 3 (geometry.placement, 'two_point'), contact A
 is the hole's mouth corner on the peg's side, pushing along the peg's inward side normal,
 and contact B the peg's tip corner on the opposite wall, pushed back along -x.
 """

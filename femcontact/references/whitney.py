@@ -491,7 +491,7 @@ def inside_parallelogram(ratio_x: float, ratio_m: float, lam: float, mu: float) 
 
 def draper(lg: float | None = None, lateral_error: float = 1.0, chamfer_width: float = 1.5,
            chamfer_angle: float = math.radians(45), kx: float = 7.0) -> Insertion:
-    """Whitney's Draper-RCC experiment (reference §4): d 12.672, D 12.705 mm, mu 0.1,
+    """Whitney's Draper-RCC experiment (Whitney, Mechanical Assemblies ch. 10): d 12.672, D 12.705 mm, mu 0.1,
     K_x 40 lb/in (7.0 N/mm), K_theta 53000 N*mm/rad, L_g = 4r by default, lateral error only.
     The chamfer is not in the source (our choice)."""
     d = 12.672

@@ -4,7 +4,7 @@ For each knob a user can turn, error against wall time (mesh, forms, solve and
 measurement of one case in this process; Python start-up excluded, forms compiled
 beforehand so the JIT cache is warm):
 
-- Hertz (reference §5, analytic reference): contact-zone size (levels 0-4, a/h_c =
+- Hertz (docs/references.md, analytic reference): contact-zone size (levels 0-4, a/h_c =
   2^(L+1) + 0.5), element degree P1/P2, the Nitsche parameter gamma, Newton rtol;
 - 2-D wedging (scenes/wedging_2d.toml, l_d = 5): mesh resolution, against a Richardson
   extrapolation of the three finest resolutions, for the residual force R_A after release

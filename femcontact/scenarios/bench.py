@@ -1,6 +1,6 @@
 """`make bench`: what accuracy costs in time, and what each effect costs, measured in one run.
 
-1. Hertz (reference §5) against GetFEM on the same protocol: each code as a whole process
+1. Hertz (docs/references.md) against GetFEM on the same protocol: each code as a whole process
    (`femcontact hertz --json`, P1 and P2; benchmarks/getfem_hertz.py, GetFEM P2 with its
    augmented Lagrangian, skipped with a message when GetFEM is not importable) on the same
    meshes h_c = a/(2^(L+1) + 0.5), L = 0..HERTZ_LEVELS, a and p0 from every code's nodal
@@ -17,7 +17,7 @@
    costs nothing), and the thesis wedging scene at about 10k dofs.
 5. The study runner's overhead per one-rank case, fresh processes against warm workers
    (runner_overhead.py).
-The goals of issue 12 are stated as ratios measured in this run. Writes results/bench/bench.md
+The solver's goals are stated as ratios measured in this run. Writes results/bench/bench.md
 and bench.json; timings are ratios within this run (a loaded machine inflates them all).
 """
 import json
@@ -325,7 +325,7 @@ def markdown(hertz_rows, effects_rows, codes=(), skipped="", wedging=None, wedgi
     lines = ["# femcontact benchmark", "", "Wall times measured in one run on a shared machine (other jobs running): "
              "compare them as ratios within this run.", ""]
     if wedging is not None:
-        lines += ["## Goals (issue 12), measured in this run", "", "| goal | measured | ratio to goal | holds |",
+        lines += ["## Goals, measured in this run", "", "| goal | measured | ratio to goal | holds |",
                   "|---|---|---|---|"]
         lines += ["| " + " | ".join(row) + " |" for row in goals(list(codes), skipped, wedging, wedging3d, overhead,
                                                                   variants)]

@@ -168,7 +168,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     'no_equilibrium' with its reason, the fields of the last converged state."""
     from mpi4py import MPI
 
-    from femcontact.outputs.fields import write_fields
+    from femcontact.outputs.fields import FieldSeries, write_fields
     from femcontact.outputs.history import HistoryWriter
     from femcontact.outputs.progress import Progress
     from femcontact.solver.stepping import Simulation, SimulationFailed
@@ -178,10 +178,13 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     case_dir, rank = Path(case_dir), MPI.COMM_WORLD.rank
     history = HistoryWriter(case_dir / "history.csv", rank)
     listeners = [history] + ([] if quiet else [Progress(scene, rank=rank)])
-    verdict = None
+    verdict, series = None, None
     try:
         simulation = Simulation(scene, listeners=listeners)
         first_step = simulation.load_checkpoint(restart) if restart else 0
+        if scene["outputs"]["fields"]:  # frames from here on: a restart's series begins at its checkpoint
+            series = FieldSeries(simulation, case_dir)
+            simulation.listeners.append(series)
         if scene["geometry"] == "snap_fit":  # a jam ends the run as an outcome, not a failure
             from femcontact.scenarios.snap_fit import run as run_snap_fit
 
@@ -200,7 +203,8 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     finally:
         for listener in listeners:
             listener.close()
-    error = MPI.COMM_WORLD.bcast(history.error, root=0)  # a full disk stops every rank, none waits below
+    # a full disk stops every rank, none waits below
+    error = MPI.COMM_WORLD.bcast(history.error or (series and series.error), root=0)
     if error is not None:
         raise error
     if checkpoint and verdict is None:

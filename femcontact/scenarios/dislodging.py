@@ -1,4 +1,4 @@
-"""Dislodging a wedged peg by pulling (reference §2, thesis ch. 4; issue 13).
+"""Dislodging a wedged peg by pulling (the thesis, ch. 4).
 
 A scene of kind "dislodging" is a 2-D peg-in-hole contact scene whose first two steps
 wedge the peg (quasi-static) and whose steps 3-4 pull and observe; its `[dislodging]`
@@ -300,7 +300,7 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
                "one_dof_first_slip_N": puller.one_dof["first_slip"], "one_dof_full_slide_N": puller.one_dof["full_slide"],
                "peg_mass_t": float(sim.problem.rigid.mass), "wedge_time_s": puller.wedge_time,
                **puller.pullout, "pullout_time_s": puller.pullout_time,
-               "degree_of_wedging": puller.pullout["quasi_static_pullout_N"]  # issue 14: P / (mu (N_A + N_B))
+               "degree_of_wedging": puller.pullout["quasi_static_pullout_N"]  # P / (mu (N_A + N_B))
                / (scene["contact"]["mu"] * (puller.contacts["N_A"] + puller.contacts["N_B"]))}
     info = {"dofs": sim.dofs, "effects": list(scene["effects"]), "built": sim.problem.built,
             "newton_iterations": int(sum(row["newton_iterations"] for row in sim.history))}
@@ -402,7 +402,7 @@ THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowes
     (2, "pulse", 30.0): (22.57, 22.58), (2, "pulse", 40.0): (22.55, 22.56), (2, "pulse", 50.0): (22.5, 22.55),
 }
 THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "thickness_mm", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
-                     "impulse_at_threshold_Ns", "threshold_over_pullout", "one_dof_first_slip_N",
+                     "impulse_at_threshold_Ns", "time_at_threshold_s", "threshold_over_pullout", "one_dof_first_slip_N",
                      "one_dof_full_slide_N", "quasi_static_pullout_N_rotation_held", "thesis_threshold_N",
                      "thesis_over_thesis_continuous"]
 
@@ -447,6 +447,11 @@ def gather(study) -> tuple[list[dict], list[dict]]:
         reference = THESIS_THRESHOLDS.get((row["case"], "continuous", 0.0), (None, None))[1]
         row["thesis_threshold_N"] = thesis if thesis is not None else ""
         row["thesis_over_thesis_continuous"] = thesis / reference if thesis and reference else ""
+        at_threshold = [pull for pull in pulls if int(pull["case"]) == row["case"] and pull["method"] == row["method"]
+                        and (_number(pull["pulse_hz"]) or 0.0) == hz and pull["dislodged"] == "True"
+                        and _number(pull["thickness_mm"]) == row["thickness_mm"]
+                        and math.isclose(float(pull["force_N"]), row["threshold_force_N"], rel_tol=1e-6)]
+        row["time_at_threshold_s"] = float(at_threshold[0]["dislodge_time_s"]) if at_threshold else ""
     key = lambda r: (int(r["case"]), r["method"], _number(r["pulse_hz"]) or 0.0, _number(r.get("force_N")) or 0.0)
     return sorted(pulls, key=key), sorted(thresholds, key=key)
 
@@ -478,6 +483,27 @@ def render_snapshots(study) -> list[Path]:
             done.add(name)
             paths.append(path)
     return paths
+
+
+SUMMARY_COLUMNS = (["threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "time_at_threshold_s",
+                    "threshold_over_pullout", "quasi_static_pullout_N", "thesis_threshold_N",
+                    "thesis_over_thesis_continuous", "case", "method", "pulse_hz", "thickness_mm"])
+"""The thresholds table at the head of the study's summary: the answer first, then the case."""
+
+
+def summary_blocks(study) -> list[tuple]:
+    """Report blocks: the thresholds table (one row per pull method and case; see SUMMARY_COLUMNS)."""
+    from femcontact.study import units
+
+    _, thresholds = gather(study)
+    if not thresholds:
+        return []
+    return [("h2", "Thresholds: the least pull that dislodges the peg"),
+            ("p", "Each method's threshold pull (bisection, within the bracket), the impulse and time it takes to "
+                  "dislodge the peg at that pull, its ratio to the quasi-static pull-out, and the thesis' threshold "
+                  "with its ratio to the thesis' continuous one (thresholds.csv has every column)."),
+            ("table", [units.label(name) for name in SUMMARY_COLUMNS],
+             [[units.format_value(row[name]) for name in SUMMARY_COLUMNS] for row in thresholds])]
 
 
 def report(study) -> list[Path]:

@@ -1,4 +1,4 @@
-"""Beyond the thesis' dislodging (issue 14): degree of wedging, other ways out, pulse
+"""Beyond the thesis' dislodging: degree of wedging, other ways out, pulse
 optimisation and the 3-D pull-out, with the machinery of `scenarios.dislodging` (the wedged
 state computed once, implicit-Euler pulls that stop at the located event "dislodged",
 thresholds by bisection).

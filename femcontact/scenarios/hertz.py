@@ -1,4 +1,4 @@
-"""The Hertz benchmark (reference §5): its scene, its measurement protocol and one run.
+"""The Hertz benchmark (docs/references.md): its scene, its measurement protocol and one run.
 
 The simulated p0 is the largest nodal contact pressure; a comes from fitting p^2 linear
 in x^2 over the outer part of the contact zone (exact for a Hertz profile). The

@@ -1,4 +1,4 @@
-"""Compliant insertion (Whitney, Mechanical Assemblies ch. 10; reference §4): the FE tier's metrics.
+"""Compliant insertion (Whitney, Mechanical Assemblies ch. 10): the FE tier's metrics.
 
 A rigid peg on a `compliant_support` descends into a chamfered hole. Each history row becomes
 one point of the force history, in the analytic tier's conventions (femcontact.references.whitney):

@@ -1,4 +1,4 @@
-"""Wedge metrics of a peg-in-hole run (reference §1): is the peg held after release?
+"""Wedge metrics of a peg-in-hole run (the thesis, ch. 3): is the peg held after release?
 
 After the last step (the load removed) the residual reactions on the two hole blocks
 are read at their supports (2-D two blocks; a single block uses the contact resultants

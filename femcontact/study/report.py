@@ -1,10 +1,12 @@
 """`femcontact report STUDY.toml`: plots, stress snapshots and a summary of a study.
 
 Everything goes to results/NAME/: the plots the study declares ([[plot]], PNG),
-snapshots/CASE_ID.png for the cases [snapshots] selects, and the summary twice, as
+snapshots/CASE_ID.png for the cases [snapshots] selects, animations/CASE_ID.mp4 and .gif
+(`femcontact animate`) for the cases [animation] selects, and the summary twice, as
 summary.md and index.html (the same table and pictures, for a browser). The table shows
-the headline columns ([report] columns, or by default case id, swept keys, status, the
-family's primary metrics and wall time; labels with units from femcontact.study.units); every
+the headline columns ([report] columns, or by default the family's primary metrics, swept
+keys, status, case id and wall time), the answer first; labels with units from
+femcontact.study.units; every
 column is in results.csv and results.sqlite. The database is rebuilt from the case
 directories first, so the report shows exactly what is on disk.
 """
@@ -22,7 +24,7 @@ from femcontact.outputs.result import ANSWERS
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.study import units
-from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, status_counts
+from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, matches, status_counts
 
 
 def add_arguments(parser):
@@ -50,11 +52,14 @@ def command(args) -> int:
     columns = headline_columns(study, columns, rows)
     plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
+    films = write_animations(study, {row["case_id"]: row for row in rows})
+    family = []  # the family's own tables, before the per-case table
     if study.cases and study.cases[0].scene.get("kind") == "dislodging":
         from femcontact.scenarios import dislodging
 
         plots += dislodging.report(study)
-    document = summary(study, columns, rows, plots, snapshots)
+        family = dislodging.summary_blocks(study)
+    document = summary(study, columns, rows, plots, snapshots, family, films)
     markdown = write_markdown(document, study.results / "summary.md")
     page = write_html(document, study.results / "index.html", f"Study {study.settings['name']}")
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
@@ -64,24 +69,45 @@ def command(args) -> int:
         print(f"  plot:      {path}")
     for path in snapshots:
         print(f"  snapshot:  {path}")
+    for path in films:
+        print(f"  animation: {path}")
     return 0
 
 
+RUN_COLUMNS = ("status", "reason", "case_id", "wall", "wall_time_s", "dofs", "ranks")
+"""Columns about the run rather than its answer or its inputs: last in the summary table."""
+
+
 def headline_columns(study, csv_columns: list[str], rows: list[dict]) -> list[str]:
-    """The summary table's columns: [report] columns (each checked against the results), or the
-    default: case id, swept keys, status, the family's primary metrics, wall time (and the failure
-    reason when a case failed), at most MAX_COLUMNS."""
+    """The summary table's columns, the answer first (`answer_first`): [report] columns (each checked
+    against the results), or the default: the family's primary metrics, the swept keys, status, case
+    id, wall time (and the failure reason when a case failed), at most MAX_COLUMNS."""
     declared = study.report.get("columns") or []
     if declared:
         for name in declared:
             if rows and name not in csv_columns and all(get_key(row["scene"], name) is None for row in rows):
                 raise InputError(f"{study.path}: [report] columns: {name!r} is neither a column of results.csv "
                                  f"nor a scene key (columns: {', '.join(csv_columns)})")
-        return list(declared)
+        return answer_first(list(declared), study.keys, rows)
     failed = any(row["status"] != "ok" for row in rows)
-    default = ["case_id", *study.keys, "status", *units.primary_metrics(csv_columns), "wall"] + \
+    default = [*units.primary_metrics(csv_columns), *study.keys, "status", "case_id", "wall"] + \
         (["reason"] if failed else [])
-    return list(dict.fromkeys(default))[:MAX_COLUMNS]
+    return answer_first(list(dict.fromkeys(default))[:MAX_COLUMNS], study.keys, rows)
+
+
+def answer_first(columns: list[str], keys: list[str], rows: list[dict]) -> list[str]:
+    """The columns in three groups, each in its given order: results (metrics), then inputs (swept
+    keys and other scene keys), then the run's bookkeeping (RUN_COLUMNS, time.PHASE)."""
+    def group(name: str) -> int:
+        if name in RUN_COLUMNS or name.startswith("time."):
+            return 2
+        if name in keys:
+            return 1
+        if any(name in row or f"metric.{name}" in row for row in rows):  # a metric
+            return 0
+        return 1 if any(get_key(row["scene"], name) is not None for row in rows) else 0
+
+    return sorted(columns, key=group)
 
 
 def column(row: dict, name: str):
@@ -303,7 +329,7 @@ def write_snapshots(study, rows: dict) -> list[Path]:
 
     settings, paths = study.snapshots, []
     for case in study.cases:
-        if not any(_matches(case.scene, flatten(selector)) for selector in settings["select"]):
+        if not any(matches(case.scene, flatten(selector)) for selector in settings["select"]):
             continue
         if case.id not in rows or rows[case.id]["status"] != "ok":
             print(f"  (no snapshot of {case.id}: no ok result)", file=sys.stderr)
@@ -325,18 +351,30 @@ def write_snapshots(study, rows: dict) -> list[Path]:
     return paths
 
 
-def _matches(scene: dict, selector: dict) -> bool:
-    def same(a, b):
-        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-            return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)
-        return a == b
+def write_animations(study, rows: dict) -> list[Path]:
+    """Films (MP4, and a GIF for summary.md) of the ok cases [animation] selects, in animations/;
+    a case without a time series is skipped with a note."""
+    from femcontact.outputs.animation import animate
 
-    return all(same(get_key(scene, key), value) for key, value in selector.items())
+    paths = []
+    for case in study.cases:
+        if not any(matches(case.scene, flatten(selector)) for selector in study.animation.get("select", [])):
+            continue
+        if case.id not in rows or rows[case.id]["status"] != "ok" or not (case.dir / "fields.xdmf").exists():
+            print(f"  (no animation of {case.id}: no ok result with fields.xdmf)", file=sys.stderr)
+            continue
+        folder = make_dir(study.results / "animations")
+        for made in animate(case.dir, scale=study.animation["scale"]):
+            path = folder / f"{case.id}{made.suffix}"
+            os.replace(made, path)
+            paths.append(path)
+    return paths
 
 
-def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> list[tuple]:
+def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=(), films=()) -> list[tuple]:
     """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
-    written as Markdown and as HTML."""
+    ("video", MP4 path, GIF path, caption), written as Markdown and as HTML; `family`: the study
+    family's own blocks, before the case table; `films`: the animations' MP4 and GIF paths."""
     counts = status_counts(rows)
     blocks = [("h1", f"Study {study.settings['name']}")]
     if study.settings["description"]:
@@ -349,6 +387,9 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> li
         commits = sorted({str(row.get("git_commit")) for row in rows})
         blocks.append(("p", f"Code: git {', '.join(commits)}; dolfinx {rows[0].get('dolfinx')}, "
                             f"python {rows[0].get('python')}."))
+        blocks += list(family)
+        if family:
+            blocks.append(("h2", "Cases"))
         blocks.append(("table", [units.label(c) for c in columns],
                        [[_cell(column(row, c), c) for c in columns] for row in rows]))
     blocks += wedge_table(rows)
@@ -358,8 +399,13 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots) -> li
     if plots:
         blocks.append(("h2", "Plots"))
         blocks += [("img", p.name, p.stem) for p in plots]
+    by_id = {case.id: case for case in study.cases}
+    if films:
+        blocks.append(("h2", "Animations"))
+        blocks += [("video", f"animations/{p.name}", f"animations/{p.stem}.gif", f"case {p.stem}: " + "; ".join(
+            units.value_label(k, v) for k, v in by_id[p.stem].params.items()) + " (von Mises stress, both bodies, "
+            "forces against time)") for p in films if p.suffix == ".mp4"]
     if snapshots:
-        by_id = {case.id: case for case in study.cases}
         blocks.append(("h2", "Stress snapshots"))
         blocks += [("img", f"snapshots/{p.name}", f"case {p.stem}: " + "; ".join(
             units.value_label(k, v) for k, v in by_id[p.stem].params.items())) for p in snapshots]
@@ -378,6 +424,8 @@ def write_markdown(blocks: list[tuple], path: Path) -> Path:
             header, body = content
             lines += ["| " + " | ".join(map(_markdown, header)) + " |", "|" + "---|" * len(header)]
             lines += ["| " + " | ".join(map(_markdown, cells)) + " |" for cells in body] + [""]
+        elif kind == "video":
+            lines += [f"[![{content[2]}]({content[1]})]({content[0]})", ""]
         else:
             lines += [f"![{content[1]}]({content[0]})", ""]
     write_text_atomic(path, "\n".join(lines).rstrip() + "\n")
@@ -412,6 +460,11 @@ def write_html(blocks: list[tuple], path: Path, title: str) -> Path:
                     f"<td>{html.escape(c)}</td>" if _numeric_text(c) else f'<td class="text">{html.escape(c)}</td>'
                     for c in cells) + "</tr>")
             parts.append("</tbody></table></div>")
+        elif kind == "video":
+            video, gif, caption = content
+            parts.append(f'<figure><video src="{html.escape(video)}" controls loop muted preload="metadata" '
+                         f'style="max-width: 100%"><img src="{html.escape(gif)}" alt="{html.escape(caption)}">'
+                         f"</video><figcaption>{html.escape(caption)}</figcaption></figure>")
         else:
             source, caption = content
             parts.append(f'<figure><img src="{html.escape(source)}" alt="{html.escape(caption)}">'

@@ -37,8 +37,8 @@ from typing import Iterator
 from femcontact.outputs.result import STATUSES
 from femcontact.errors import InputError
 from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
-from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
-from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.config.schema import Field, TableList, set_key, validate
+from femcontact.config.scene import apply_overrides, case_id, read_toml, resolve
 from femcontact.study.workers import Pool, Worker
 
 _TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
@@ -94,6 +94,14 @@ SCHEMA = {
                       else "expected a name or [x, y(, z), radius]"),
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
+    },
+    "animation": {
+        "select": Field("any", [], "cases filmed in the report (femcontact animate), as [snapshots] selects them; "
+                        "they run with outputs.fields = true",
+                        check=lambda v: None if isinstance(v, list) and all(isinstance(t, dict) and t for t in v)
+                        else "must be an array of non-empty tables"),
+        "scale": Field("float", 1.0, "displacement magnification of the films", min=0.0),
+        "every": Field("int", 1, "film every N-th increment (outputs.every of the filmed cases)", min=1),
     },
     "report": {
         "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
@@ -178,6 +186,7 @@ class Study:
     base: dict = field(default_factory=dict)  # the base scene with the study's and --set values, unresolved
     sweep: dict = field(default_factory=dict)
     count: int = 0  # parameter sets of the sweep (cases before duplicates are merged)
+    animation: dict = field(default_factory=dict)
 
     @property
     def database(self) -> Path:
@@ -242,15 +251,14 @@ def load_study(path, overrides=(), results_root="results", max_cases=None, resol
     base = read_toml(path.parent / settings["scene"])
     for key, value in flatten(raw["scene"]).items():
         set_key(base, key, value)
-    for text in overrides:  # --set changes the base scene; the sweep still varies its own keys
-        set_key(base, *parse_assignment(text))
+    apply_overrides(base, overrides)  # --set changes the base scene; the sweep still varies its own keys
     count = count_cases(raw["sweep"])
     if max_cases is not None and count > max_cases:
         raise InputError(f"{path}: the sweep makes {count} cases, more than the limit of {max_cases}; nothing was "
                          f"run (pass --max-cases {count} to run them all, or --list to see them)")
     results = Path(results_root) / settings["name"]
     study = Study(path, settings, [], swept_keys(raw["sweep"]), results, raw["plot"], raw["snapshots"],
-                  raw["report"], base=base, sweep=raw["sweep"], count=count)
+                  raw["report"], base=base, sweep=raw["sweep"], count=count, animation=raw["animation"])
     _check_scene_once(study)
     if resolve_cases:
         make_cases(study)
@@ -297,6 +305,8 @@ def iter_cases(study: Study) -> Iterator[Case]:
     for params in expand(study.sweep):
         try:
             scene = resolve(_case_data(study.base, params))
+            if "outputs" in scene and any(matches(scene, flatten(t)) for t in study.animation["select"]):
+                scene["outputs"].update(fields=True, every=study.animation["every"])  # filmed in the report
         except InputError as error:
             problems.setdefault(str(error), []).append(params)
             continue
@@ -312,6 +322,16 @@ def iter_cases(study: Study) -> Iterator[Case]:
                  + "; ".join(_describe(params) for params in cases[:3]) + ("; ..." if len(cases) > 3 else "") + ")"
                  for message, cases in problems.items()]
         raise InputError(f"{study.path}: {invalid} invalid case(s), nothing was run:\n  " + "\n  ".join(lines))
+
+
+def matches(scene: dict, selector: dict) -> bool:
+    """Does the scene have every dotted key of `selector` at its value (numbers to 1e-9)?"""
+    def same(a, b):
+        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)
+        return a == b
+
+    return all(same(get_key(scene, key), value) for key, value in selector.items())
 
 
 def attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:

@@ -66,6 +66,46 @@ LABELS = {
     "newton_iterations": "Newton iterations",
     "increments": "increments",
     "yielded": "yielded",
+    # dislodging metrics (femcontact.scenarios.dislodging)
+    "threshold_force_N": "threshold pull (N)",
+    "bracket_N": "threshold bracket (N)",
+    "impulse_at_threshold_Ns": "impulse at the threshold (N s)",
+    "time_at_threshold_s": "time to dislodge at the threshold (s)",
+    "quasi_static_pullout_N": "quasi-static pull-out (N)",
+    "threshold_over_pullout": "threshold / pull-out",
+    "thesis_threshold_N": "thesis' threshold (N)",
+    "thesis_over_thesis_continuous": "thesis' threshold / its continuous one",
+    "case": "thesis case",
+    "method": "pull",
+    "pulse_hz": "pulse frequency (Hz)",
+    "thickness_mm": "thickness (mm)",
+    "degree_of_wedging": "degree of wedging P / (mu (N_A + N_B))",
+    "dislodging.case": "thesis case",
+    "dislodging.method": "pull",
+    "dislodging.pulse_hz": "pulse frequency (Hz)",
+    "dislodging.thickness": "thickness (mm)",
+    "dislodging.task": "task",
+    "optimum_objective_impulse_Ns": "least impulse found (N s)",
+    "optimum_objective_peak_force_N": "least peak pull found (N)",
+    # insertion metrics (femcontact.scenarios.insertion): FE, then the analytic tier
+    "two_point_onset": "two-point onset depth (mm)",
+    "analytic_two_point_onset": "two-point onset, analytic (mm)",
+    "peak_force": "peak insertion force (N)",
+    "analytic_peak_force": "peak insertion force, analytic (N)",
+    "peak_depth": "depth at the peak (mm)",
+    "analytic_peak_depth": "depth at the peak, analytic (mm)",
+    "chamfer_peak_force": "chamfer peak force (N)",
+    "analytic_chamfer_peak_force": "chamfer peak force, analytic (N)",
+    "jammed": "jammed",
+    "analytic_jams": "jams (analytic)",
+    **{f"{q}_error_{phase}": f"{q[0].upper()}{q[1]} error, {phase.replace('_', '-')} (rel.)"
+       for q in ("fz", "fx") for phase in ("chamfer", "edge", "one_point", "two_point")},
+    "peg.offset": "lateral error (mm)",
+    "peg.tilt": "tilt error (deg)",
+    "support.compliance_centre": "compliance centre L_g (mm)",
+    "support.model": "support",
+    "materials.hole.E": "hole E (MPa)",
+    "dim": "dimension",
     # rcc metrics (femcontact.rcc)
     "max_rel_error": "largest relative error",
     "worst_dof": "worst dof",
@@ -85,6 +125,8 @@ LABELS = {
 # Headline metrics per family, picked by the first metric of the list a study's rows have.
 PRIMARY = {
     "wedging": ["wedged", "analytic_wedged", "residual_force_A", "tilt_released_deg", "max_von_mises"],
+    "dislodging": ["threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "quasi_static_pullout_N",
+                   "degree_of_wedging"],
     "rcc": ["max_rel_error", "worst_dof", "centre_z", "centre_z_moved"],
     "contact": ["max_von_mises", "newton_iterations"],
 }
@@ -114,7 +156,7 @@ def primary_metrics(columns) -> list[str]:
 
 
 # Metrics stored as 0/1 that mean no/yes.
-FLAGS = {"wedged", "analytic_wedged", "near_boundary", "yielded"}
+FLAGS = {"wedged", "analytic_wedged", "near_boundary", "yielded", "jammed", "analytic_jams"}
 
 
 def value_label(name: str, value) -> str:

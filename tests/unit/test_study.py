@@ -287,13 +287,14 @@ def test_report_writes_plots_summary_html_and_snapshots(tmp_path, fake, monkeypa
     assert len(pictures) == 3 and all(p.read_bytes()[:8] == PNG and str(p) in out for p in pictures)
     summary = (results / "summary.md").read_text()
     assert "4 cases: 4 ok" in summary and summary.count("| ok |") == 4
-    headers = ["case", "friction mu", "Nitsche gamma", "status", "product", "time total (s)"]
+    # the answer first (the metric), then the inputs, then the run's columns, each group as declared
+    headers = ["product", "friction mu", "Nitsche gamma", "case", "status", "time total (s)"]
     assert "| " + " | ".join(headers) + " |" in summary.splitlines()
 
     page = Page()
     page.feed((results / "index.html").read_text())
     assert page.headers == headers and len(page.rows) == 1 + 4 and all(len(r) == 6 for r in page.rows[1:])
-    by_mu_gamma = {(float(r[1]), float(r[2])): float(r[4]) for r in page.rows[1:]}
+    by_mu_gamma = {(float(r[1]), float(r[2])): float(r[0]) for r in page.rows[1:]}
     assert by_mu_gamma == pytest.approx({(0.1, 1.0): 0.1, (0.1, 2.0): 0.2, (0.2, 1.0): 0.2, (0.2, 2.0): 0.4})
     assert sorted(results / src for src in page.images) == sorted(pictures)
     assert sorted(page.images) == sorted(re.findall(r"!\[[^]]*\]\(([^)]+)\)", summary))
@@ -305,8 +306,8 @@ def test_report_columns_default_and_checked(tmp_path, fake, capsys):
     assert run_study(path) == 0
     assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 0
     summary = (tmp_path / "results/demo/summary.md").read_text().splitlines()
-    header = next(line for line in summary if line.startswith("| case |"))
-    assert header == "| case | friction mu | Nitsche gamma | status | wall time (s) |"
+    header = next(line for line in summary if line.startswith("| friction mu |"))
+    assert header == "| friction mu | Nitsche gamma | status | case | wall time (s) |"
 
     path.write_text(path.read_text() + '[report]\ncolumns = ["contact.mu", "prodcut"]\n')
     assert main(["report", str(path), "--results", str(tmp_path / "results")]) == 2
