@@ -143,6 +143,7 @@ def plot(wedging: list[dict], edges: list[dict], path: Path) -> None:
     left.loglog(sizes, [r["peak_B_plastic"] for r in edges], "s--", label="block B, plastic")
     left.axhline(210, color="grey", lw=0.8, ls=":", label="yield 210 MPa")
     left.set(xlabel="contact element size (mm)", ylabel="peak von Mises (MPa)", title="Edge radius: the peak converges")
+    left.invert_xaxis()  # refinement to the right
     left.legend(fontsize=8)
     for depth in (4.0, 5.0, 6.0):
         rows = [r for r in wedging if r["l_d"] == depth]
