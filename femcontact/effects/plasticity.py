@@ -30,8 +30,7 @@ class Plasticity(Effect):
         scene, dim, u = problem.scene, problem.dim, problem.u
         lmbda, mu = law.lame(problem.constants["E"], problem.constants["nu"])
         segments = j2.hardening_segments(hardening_points(scene, problem.deformable))
-        degree = scene["mesh"]["degree"]
-        self.quadrature = j2.QuadratureState(problem.mesh, 2 * (degree - 1) if degree > 1 else 1)
+        self.quadrature = j2.QuadratureState(problem.mesh, scene["mesh"]["degree"])
         q = self.quadrature
         strain = j2.to_3d(law.strain(u))
         _, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu, segments)

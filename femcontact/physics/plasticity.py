@@ -91,11 +91,13 @@ def elastic_energy(strain, plastic_strain, lmbda, mu):
 
 class QuadratureState:
     """The plastic state (3 x 3 plastic strain, equivalent plastic strain PEEQ) at the
-    quadrature points of a rule of `degree`, with `dx` integrating on those points; also
+    quadrature points of the rule that integrates the stiffness of Lagrange elements of
+    `displacement_degree` exactly (degree 2 (k - 1), at least 1), with `dx` on those points; also
     each cell's mean (DG0: `plastic_strain_cell`, `peeq_cell`), which can be read on facets
     and at any point (exact for P1 elements, where the rule has one point per cell)."""
 
-    def __init__(self, mesh, degree: int):
+    def __init__(self, mesh, displacement_degree: int):
+        degree = max(2 * (displacement_degree - 1), 1)
         cell = mesh.ufl_cell()
         cell_type = basix.cell.string_to_type(cell.cellname())
         self.points, weights = basix.make_quadrature(cell_type, degree)

@@ -21,7 +21,7 @@ class PlasticBody:
         self.u, v = fem.Function(self.V), ufl.TestFunction(self.V)
         self.bcs = make_bcs(self.V)
         lmbda, mu = law.lame(E, nu)
-        self.state = j2.QuadratureState(mesh, 2 * (degree - 1) if degree > 1 else 1)
+        self.state = j2.QuadratureState(mesh, degree)
         q = self.state
         strain = j2.to_3d(law.strain(self.u))
         self.stress, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu,
