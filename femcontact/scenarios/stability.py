@@ -130,6 +130,27 @@ def equilibrium_summary(results: dict, needed: dict) -> list[str]:
     return lines + [""] if lines else []
 
 
+SLOW_RATIO = 3.0
+"""A converged case slower than this many times the median of its neighbours is reported as slow."""
+NEIGHBOUR_RESOLUTION = 1.25
+"""Neighbours of a case: the converged cases whose mesh resolution lies within this factor of its own."""
+
+
+def slow_cases(results: dict) -> list[tuple[str, float, float]]:
+    """Converged cases slower than SLOW_RATIO x the median wall time of their converged neighbours
+    (mesh resolution within NEIGHBOUR_RESOLUTION): (case id, wall time s, ratio), slowest first.
+    Convergence bought with hundreds of cuts or pseudo steps shows here."""
+    done = {cid: (scene["mesh"]["resolution"], result["timings"]["total"]) for cid, (scene, result) in results.items()
+            if scene and result and result["status"] == "ok" and "total" in result.get("timings", {})}
+    out = []
+    for cid, (resolution, seconds) in done.items():
+        others = [t for other, (r, t) in done.items()
+                  if other != cid and resolution / NEIGHBOUR_RESOLUTION <= r <= resolution * NEIGHBOUR_RESOLUTION]
+        if others and seconds > SLOW_RATIO * float(np.median(others)):
+            out.append((cid, seconds, seconds / float(np.median(others))))
+    return sorted(out, key=lambda item: -item[2])
+
+
 def case_dirs(name: str, rows: list[dict], scene_path: Path) -> list[Path]:
     """The directories of a sweep's cases, as the study runner names them (by scene hash)."""
     base, dirs = read_toml(scene_path), set()
@@ -168,6 +189,10 @@ def report(studies: list[tuple[str, list, Path]]) -> tuple[str, int]:
             lines.append("")
         for cid, defect in found:
             lines.append(f"- DEFECT {cid}: {defect}")
+        slow_ones = slow_cases(results)
+        lines += [f"- converged cases slower than {SLOW_RATIO:g}x the median of their converged neighbours "
+                  f"(mesh resolution within {NEIGHBOUR_RESOLUTION:g}x): {len(slow_ones)}"]
+        lines += [f"  - {cid}: {seconds:.1f} s, {ratio:.1f}x" for cid, seconds, ratio in slow_ones]
         slow = sorted(((r["timings"].get("total", 0.0), cid) for cid, (_, r) in results.items() if r),
                       reverse=True)[:5]
         lines += ["", "| slowest cases | wall time (s) | Newton iterations |", "|---|---|---|"]

@@ -2,8 +2,9 @@
 
 An increment whose Newton iteration does not converge (`NewtonFailure`: too many
 iterations, a non-finite residual or a failed linear solve) is retried from the last
-converged state, first with the contact stabilisation's continuation, then halved, up
-to `solver.max_cuts` times; after a success it grows back. A run that still fails raises
+converged state, first with the contact stabilisation's continuation, then by
+pseudo-transient continuation (a rigid body that must travel to the contact that holds it),
+then halved, up to `solver.max_cuts` times; after a success it grows back. A run that still fails raises
 `SimulationFailed` naming the step, the time and the residual history. Any other
 exception is a fault, not non-convergence: it ends the run at once.
 Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
@@ -23,6 +24,12 @@ STABILIZATION_FACTORS = (1.0, 1e-1, 1e-2, 1e-4, 1e-6, 0.0)
 """Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
 STABILIZATION_TOLERANCE = 1e-3
 """Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
+PSEUDO_FAILURES = 6
+"""Failed pseudo steps after which `Simulation.pseudo_transient_solve` gives up."""
+PSEUDO_ITERATIONS = 600
+"""Newton iterations (failed ones included) after which `Simulation.pseudo_transient_solve` gives up."""
+PSEUDO_SOFTENING = 4.0
+"""Factor by which a converged pseudo step softens the stabilisation spring (a failed one stiffens it)."""
 
 
 class SimulationFailed(RuntimeError):
@@ -73,6 +80,7 @@ class Simulation:
         self.events = []  # callables(index, row) -> str: a non-empty answer ends the run (`stopped`)
         self.last_change = None  # (step, dt, displacement change) of the last converged increment
         self.stabilization_force = 0.0
+        self.pseudo_transient_exhausted = None  # the step in which pseudo-transient continuation gave up
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
@@ -167,7 +175,14 @@ class Simulation:
             except NewtonFailure:
                 p.restore(state)
                 self._prescribe(load)
-                iterations = self.stabilized_solve(load)
+                try:
+                    iterations = self.stabilized_solve(load)
+                except NewtonFailure:
+                    if self.pseudo_transient_exhausted == load.step:
+                        raise
+                    p.restore(state)
+                    self._prescribe(load)
+                    iterations = self.pseudo_transient_solve(load)
         except BaseException:
             p.restore(state)
             raise
@@ -222,6 +237,54 @@ class Simulation:
         finally:
             self.newton.stabilize(0.0)
         return iterations
+
+    def pseudo_transient_solve(self, load) -> int:
+        """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
+        stabilisation spring ties the body to its pose at the start of each pseudo step, so a body
+        without stiffness in some direction (pivoting on one contact node after the other contact
+        opened) travels in bounded steps until it meets what holds it. A converged pseudo step
+        softens the spring PSEUDO_SOFTENING times (longer steps), down to the stiffness of the last
+        failed one times PSEUDO_SOFTENING; a failed one is retried that much stiffer. When a pseudo
+        step barely loads the spring (STABILIZATION_TOLERANCE of the peak load) the body is at
+        rest: the exact equations are solved from there (failing that, the state at rest is kept
+        and its spring force reported, as in `stabilized_solve`). It gives up after
+        PSEUDO_FAILURES failed pseudo steps or PSEUDO_ITERATIONS Newton iterations, and then for
+        the rest of the step: halving the load does not shorten the way to rest."""
+        from femcontact.solver.newton import NewtonFailure
+
+        p, iterations, spent, failures = self.problem, 0, 0, 0
+        factor, floor = 1.0, 0.0
+        try:
+            while failures < PSEUDO_FAILURES and spent < PSEUDO_ITERATIONS:
+                start = p.state()
+                self.newton.stabilize(factor, anchor=p.rigid.values)
+                try:
+                    taken = self.newton.solve(load)
+                except NewtonFailure as failure:
+                    p.restore(start)
+                    spent += len(failure.history)
+                    failures += 1
+                    factor *= PSEUDO_SOFTENING
+                    floor = factor
+                    continue
+                iterations, spent = iterations + taken, spent + taken
+                force = self.newton.stabilization_force()
+                if force <= STABILIZATION_TOLERANCE * self.peak_load:
+                    rest = p.state()
+                    self.newton.stabilize(0.0)
+                    try:
+                        iterations += self.newton.solve(load)
+                        self.stabilization_force = 0.0
+                    except NewtonFailure:
+                        p.restore(rest)
+                        self.stabilization_force = force
+                    return iterations
+                factor = max(factor / PSEUDO_SOFTENING, floor)
+        finally:
+            self.newton.stabilize(0.0)
+        self.pseudo_transient_exhausted = load.step
+        raise NewtonFailure(f"the rigid body did not come to rest by pseudo-transient continuation "
+                            f"({failures} failed pseudo steps, {spent} Newton iterations)", [])
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""

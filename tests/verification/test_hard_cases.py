@@ -1,0 +1,52 @@
+"""Hard cases of the stability sweep (`make stability`) converge: regression tests on coarse meshes.
+
+A push down and to the left on the top of a peg leaning in two-point contact (mu 0.67, the rigid
+two-point statics need 0.13: `references.two_point_statics`): under this load the lower contact
+(the peg's corner on the right wall) would have to pull, so it opens, and the peg pivots on the
+single node at the left block's corner with no stiffness against turning. It turns clockwise until
+it stands against the left wall, upright, and rests there: pressed by -Fx, held by friction
+(|Fy / Fx| = 0.31 < mu). Newton alone and the stabilisation's continuation fail here (the body
+must travel 2.5e-3 rad to the contact that holds it); pseudo-transient continuation
+(`Simulation.pseudo_transient_solve`) converges on the exact equations.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from femcontact.config.scene import load_scene
+from femcontact.solver.stepping import Simulation
+
+SCENE = Path(__file__).parents[2] / "scenes" / "wedging_2d.toml"
+PUSH = [-0.373, -0.1157]  # N, on the peg top
+CASE = ["contact.mu=0.6719", "hole.width=40.01351", "peg.insertion_depth=5.372", "materials.hole.nu=0.4252",
+        f"steps.0.force={PUSH}", "steps.0.increments=1", "mesh.resolution=0.35"]
+
+
+@pytest.fixture(scope="module")
+def pushed():
+    scene = load_scene(SCENE, CASE)
+    simulation = Simulation(scene, MPI.COMM_WORLD)
+    tilt = simulation.problem.rigid.tilt()
+    simulation.run_step(0, scene["steps"][0])
+    return tilt, simulation.history[-1]
+
+
+def test_the_peg_turns_upright_against_the_left_wall(pushed):
+    tilt, row = pushed
+    # placed in two-point contact: d cos(tilt) + l_d sin(tilt) = D
+    assert 40.0 * np.cos(tilt) + 5.372 * np.sin(tilt) == pytest.approx(40.01351, abs=1e-9)
+    # upright to the wall's flatness under the contact's penetration (micrometres over the depth)
+    assert abs(np.radians(row["tilt_deg"])) < 1e-3 * tilt
+    assert row["contact_B_force"] == 0.0  # the right wall lets go
+    assert row["active_nodes"] > 5  # the peg's flank lies along the left wall
+
+
+def test_the_exact_equations_hold(pushed):
+    _, row = pushed
+    assert row["stabilization_force"] == 0.0  # no spring left: the converged state is an equilibrium
+    # the left wall alone balances the push (to the solver's tolerance, 1e-6 N)
+    assert row["contact_A_Fx"] == pytest.approx(PUSH[0], abs=1e-5)
+    assert row["contact_A_Fy"] == pytest.approx(PUSH[1], abs=1e-5)
+    assert abs(row["contact_A_Fy"]) < row["contact_A_Fx"] * -0.6719  # inside the friction cone
