@@ -28,6 +28,9 @@ of its zones A and B). The peg is *wedged* when all of these hold:
 push (-5, 1) N, l_d = 4, 5, 6: `THESIS_CASES`) the thesis' values sit beside ours
 (`thesis_tilt_change_deg`, `thesis_residual_force_A`) with the ratios ours / thesis
 (`tilt_change_over_thesis`, `residual_over_thesis`), so a study of set-ups can be ranked.
+`push_friction_needed` is the least mu with which a rigid peg at the placement holds the first
+step's load (`scenarios.stability.friction_needed`): below the scene's mu the push alone cannot
+make a rigid peg slide.
 
 `wedge_reason` says which condition failed ("wedged" when none). The analytic condition
 l_crit <= l_d <= mu d (geometric, `femcontact.analytic`) is reported beside it
@@ -41,6 +44,7 @@ import math
 import numpy as np
 
 from femcontact.references import peg_in_hole as analytic
+from femcontact.scenarios.stability import friction_needed
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
 STABILIZATION_TOL = 1e-3  # stabilisation force after release / residual force
@@ -159,5 +163,6 @@ def wedge_metrics(simulation) -> dict:
     out["wedged"] = reason == "wedged"
     out.update(analytic_metrics(scene))
     out.update(thesis_metrics(scene, out))
+    out["push_friction_needed"] = friction_needed(scene)
     out["wall_time_s"] = float(sum(simulation.timings.values()))
     return out
