@@ -169,10 +169,11 @@ class Puller:
         wall = time.perf_counter() - start
         start_time = float(sim.schedule.start_times[PULL_STEP])
         row = {"case": s["case"], "method": method, "pulse_hz": frequency if method == "pulse" else "",
-               "force_N": float(force), "dislodged": outcome.event is not None,
-               "dislodge_time_s": "", "impulse_Ns": "", "impulse_frames_Ns": "", "event": outcome.event or "",
+               "rotation": "held" if self.rotation_held else "free", "force_N": float(force),
+               "dislodged": outcome.event is not None, "dislodge_time_s": "", "impulse_Ns": "",
+               "impulse_frames_Ns": "", "event": outcome.event or "",
                "rise_at_end_mm": float(sim.problem.rigid.values[1] - self.wedged["state"]["r"][1]),
-               "rotation": s["rotation"], "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
+               "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
                "settled": outcome.settled, "wall_s": wall}
         if outcome.event:
             if self.before_event is None or force < self.before_event[0]:
@@ -491,9 +492,78 @@ def render_snapshots(study) -> list[Path]:
     return paths
 
 
+FRAME_COLUMNS = ["case", "method", "pulse_hz", "rotation", "force_N", "thesis_frame", "frame", "dislodge_time_s",
+                 "frame_difference", "within_one_frame", "thesis_impulse_Ns", "impulse_frames_Ns"]
+
+
+def thesis_frames(pulls: list[dict], thesis: list[dict], frame: float = 0.005) -> list[dict]:
+    """Row-by-row comparison with the thesis' table: every thesis cell (case, method, frequency,
+    force) that one of our pulls ran at the same force (to 1e-6 N). Our frame is ceil(t / frame),
+    frames numbered from the start of the pull (frame k ends at k x 0.005 s, the convention of the
+    thesis' 50 Hz cells); "" where one side did not dislodge. `within_one_frame`: both dislodged
+    within one frame of each other, or neither did."""
+    out = []
+    for ours in pulls:
+        method = "pulsed" if ours["method"] == "pulse" else "continuous"
+        hz = "" if method == "continuous" else f"{float(ours['pulse_hz']):g}"
+        match = [r for r in thesis if int(r["case"]) == int(ours["case"]) and r["method"] == method
+                 and r["pulse_hz"] == hz and abs(float(r["force_N"]) - float(ours["force_N"])) < 1e-6]
+        if not match:
+            continue
+        theirs = int(match[0]["dislodge_frame"]) if match[0]["dislodge_frame"] else None
+        mine = math.ceil(float(ours["dislodge_time_s"]) / frame - 1e-9) if ours["dislodged"] in (True, "True") else None
+        both = theirs is not None and mine is not None
+        out.append({**{k: ours[k] for k in ("case", "method", "pulse_hz", "rotation", "force_N", "dislodge_time_s",
+                                             "impulse_frames_Ns")},
+                    "thesis_frame": theirs if theirs is not None else "", "frame": mine if mine is not None else "",
+                    "frame_difference": mine - theirs if both else "",
+                    "within_one_frame": (abs(mine - theirs) <= 1) if both else (theirs is None and mine is None),
+                    "thesis_impulse_Ns": match[0]["impulse_Ns"]})
+    return out
+
+
+def absolute_impulse_plots(pulls: list[dict], thesis: list[dict], out: Path) -> list[Path]:
+    """caseN_impulse_vs_force_N.png: the frame-quantised impulse (and the exact one, dotted) of our
+    dislodging pulls against the peak force in N, beside the thesis' cells of the same method
+    (its Figures 4-7 to 4-10 on one plot): for a model whose thresholds are the thesis' own."""
+    import matplotlib.pyplot as plt
+
+    paths = []
+    for case in sorted({int(r["case"]) for r in pulls}):
+        fig, ax = plt.subplots(figsize=(8, 5))
+        mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
+        series = sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, r.get("rotation") or "free") for r in mine})
+        for k, (method, hz, rotation) in enumerate(series):
+            rows = sorted((r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, r.get("rotation") or "free")
+                           == (method, hz, rotation)), key=lambda r: float(r["force_N"]))
+            name = "continuous" if method == "continuous" else f"{hz:g} Hz"
+            force = [float(r["force_N"]) for r in rows]
+            ax.plot(force, [float(r["impulse_frames_Ns"]) for r in rows], "o-", ms=3, lw=0.8, color=f"C{k}",
+                    label=f"model {name}, rotation {rotation}, to the frame")
+            ax.plot(force, [float(r["impulse_Ns"]) for r in rows], ":", lw=0.8, color=f"C{k}")
+            hz_text = "" if method == "continuous" else f"{hz:g}"
+            theirs = [(float(r["force_N"]), float(r["impulse_Ns"])) for r in thesis
+                      if int(r["case"]) == case and r["method"] == ("continuous" if method == "continuous" else "pulsed")
+                      and r["pulse_hz"] == hz_text and _number(r["impulse_Ns"]) is not None]
+            if theirs:
+                ax.plot(*zip(*sorted(theirs)), "x--", ms=4, lw=0.6, color=f"C{k}", label=f"thesis {name}")
+        ax.set_xlabel("peak pull force (N)")
+        ax.set_ylabel("impulse to dislodge (N s); dotted: to the event")
+        ax.set_title(f"case {case}: impulse against the peak force, ours and the thesis'")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+        fig.tight_layout()
+        path = out / f"case{case}_impulse_vs_force_N.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
 def report(study) -> list[Path]:
     """results/NAME/results.csv (one row per pull; replaces the runner's per-case export, which
-    stays in results.sqlite), thresholds.csv and the plots; returns the plot paths."""
+    stays in results.sqlite), thresholds.csv, thesis_frames.csv (the pulls at the thesis'
+    magnitudes against its table, `thesis_frames`) and the plots; returns the plot paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -509,6 +579,14 @@ def report(study) -> list[Path]:
     # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
     thesis_path = Path(__file__).resolve().parents[2] / "tests" / "data" / "dislodging_thesis.csv"
     thesis = _read_csv(thesis_path) if thesis_path.exists() else []
+    frames = thesis_frames(pulls, thesis)
+    if frames:
+        with open(out / "thesis_frames.csv", "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fieldnames=FRAME_COLUMNS, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(frames)
+        agree = sum(bool(r["within_one_frame"]) for r in frames)
+        print(f"thesis frames: {agree} of {len(frames)} rows within one frame (thesis_frames.csv)")
     paths = []
     for case in sorted({int(r["case"]) for r in pulls}):
         reference = THESIS_THRESHOLDS[(case, "continuous", 0.0)][1]
@@ -551,6 +629,7 @@ def report(study) -> list[Path]:
             fig.savefig(path, dpi=110)
             plt.close(fig)
             paths.append(path)
+    paths += absolute_impulse_plots(pulls, thesis, out)
     paths += render_snapshots(study)
     if thresholds:
         fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
