@@ -45,6 +45,7 @@ import numpy as np
 
 from femcontact.references import peg_in_hole as analytic
 from femcontact.scenarios.stability import friction_needed
+from geometry.placement import peg_pose
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
 STABILIZATION_TOL = 1e-3  # stabilisation force after release / residual force
@@ -94,6 +95,15 @@ def analytic_metrics(scene: dict) -> dict:
     out["boundary_distance"] = min(abs(l_d - crit), abs(l_d - top)) / top if top > 0 else math.inf
     out["near_boundary"] = bool(out["boundary_distance"] < BOUNDARY_BAND)
     return out
+
+
+def push_friction_needed(scene: dict) -> float | None:
+    """The least mu with which a rigid peg at the two-point placement holds the first step's load
+    (`scenarios.stability.friction_needed`); None for a load point the placement does not name
+    (the peg's reference point) or a scene without a two-point placement."""
+    if scene["dim"] != 2 or scene["steps"][0]["load_point"] not in peg_pose(scene).points:
+        return None
+    return friction_needed(scene)
 
 
 def load_scale(scene: dict, history: list[dict]) -> float:
@@ -163,6 +173,6 @@ def wedge_metrics(simulation) -> dict:
     out["wedged"] = reason == "wedged"
     out.update(analytic_metrics(scene))
     out.update(thesis_metrics(scene, out))
-    out["push_friction_needed"] = friction_needed(scene)
+    out["push_friction_needed"] = push_friction_needed(scene)
     out["wall_time_s"] = float(sum(simulation.timings.values()))
     return out
