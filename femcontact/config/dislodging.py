@@ -16,6 +16,9 @@ DISLODGING = {
     "thickness": Field("float", 1.0, "model thickness (mm). The scene is per mm of thickness; with absolute loads a "
                        "thickness t is the 1-mm model with the peg's mass times t (the quasi-static wedge is "
                        "homogeneous of degree 1 in the loads), which is how it is applied", positive=True),
+    "rotation": Field("str", "free", "the peg's rotation during the pull: 'free' (only the pull acts on it) or "
+                      "'held' at its wedged angle (a pull that also restrains the rotation, as the thesis' "
+                      "thresholds suggest: docs/dislodging.md)", choices=("free", "held")),
     "search": Field("bool", True, "bisect for the threshold force"),
     "bracket": Field("floats", [], "initial bracket [low, high] (N) of the threshold; [] = 1 and 1.05 "
                      "times the quasi-static pull-out force (widened until it brackets)"),

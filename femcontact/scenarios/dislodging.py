@@ -28,6 +28,7 @@ import csv
 import json
 import math
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -117,14 +118,16 @@ class Puller:
         self.tilt = sim.problem.rigid.tilt()
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
+        self.rotation_held = self.settings["rotation"] == "held"
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
         if restart and stored.is_file():
             self.pullout = json.loads(stored.read_text())
         else:
-            held = self.quasi_static_pullout(rotation_held=True) if held_pullout else {}
+            held = self.quasi_static_pullout(rotation_held=True) if held_pullout or self.rotation_held else {}
             self.pullout = {**self.quasi_static_pullout(), **{f"{k}_rotation_held": v for k, v in held.items()}}
         self.pullout_time = time.perf_counter() - start
+        self.pullout_force = self.pullout["quasi_static_pullout_N" + ("_rotation_held" if self.rotation_held else "")]
         if checkpoint and sim.problem.mesh.comm.rank == 0:
             from femcontact.io import write_json_atomic
 
@@ -159,14 +162,16 @@ class Puller:
         sim.resume(self.wedged)
         self._set_pull(force, method, frequency)
         start = time.perf_counter()
-        outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
-                                s["max_rise_per_increment"],
-                                settle_period=1 / frequency if method == "pulse" else 0.01)
+        with self.rotation(self.rotation_held):
+            outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
+                                    s["max_rise_per_increment"],
+                                    settle_period=1 / frequency if method == "pulse" else 0.01)
         wall = time.perf_counter() - start
         start_time = float(sim.schedule.start_times[PULL_STEP])
         row = {"case": s["case"], "method": method, "pulse_hz": frequency if method == "pulse" else "",
-               "force_N": float(force), "dislodged": outcome.event is not None,
-               "dislodge_time_s": "", "impulse_Ns": "", "impulse_frames_Ns": "", "event": outcome.event or "",
+               "rotation": "held" if self.rotation_held else "free", "force_N": float(force),
+               "dislodged": outcome.event is not None, "dislodge_time_s": "", "impulse_Ns": "",
+               "impulse_frames_Ns": "", "event": outcome.event or "",
                "rise_at_end_mm": float(sim.problem.rigid.values[1] - self.wedged["state"]["r"][1]),
                "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
                "settled": outcome.settled, "wall_s": wall}
@@ -181,7 +186,7 @@ class Puller:
     def threshold(self, method: str, frequency: float, rows: list) -> dict:
         """Bisection for the smallest peak force that dislodges (every pull appended to rows)."""
         s = self.settings
-        pullout = self.pullout["quasi_static_pullout_N"]
+        pullout = self.pullout_force
         low, high = s["bracket"] or (pullout, 1.05 * pullout)
         cache = {round(row["force_N"], 6): row for row in rows}  # pulls already run are reused
 
@@ -233,18 +238,28 @@ class Puller:
         lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
         return bool(np.all(sim.zone_forces() > 0) and abs(lift) < 1e-3)
 
+    @contextmanager
+    def rotation(self, held: bool):
+        """The peg's rotation held at its wedged angle inside the block (a pull that also
+        restrains the rotation, e.g. a gripper), else left as the scene sets it."""
+        sim = self.simulation
+        modes = list(sim.problem.rigid.modes)
+        if held:
+            sim.problem.rigid.modes[2] = "held"
+            sim.held = self.wedged["state"]["r"].copy()
+        try:
+            yield
+        finally:
+            sim.problem.rigid.modes[:] = modes
+            sim.held = None
+
     def quasi_static_pullout(self, rotation_held: bool = False) -> dict:
         """The largest pull the wedge holds quasi-statically, by bisection to `tolerance` between
         0 and 1.5 times the 1-DOF full-slide force (a slow ramp without inertia, each force solved
         from the wedged state: in stick the response is elastic, hence path-independent).
         `rotation_held`: the peg's rotation is held at its wedged angle (a pull that also
         restrains the rotation, for comparison with the 1-DOF full-slide force)."""
-        sim = self.simulation
-        modes = list(sim.problem.rigid.modes)
-        if rotation_held:
-            sim.problem.rigid.modes[2] = "held"
-            sim.held = self.wedged["state"]["r"].copy()
-        try:
+        with self.rotation(rotation_held):
             tolerance = self.settings["tolerance"]
             low, high = 0.0, 1.5 * self.one_dof["full_slide"]
             if self.holds(high):
@@ -255,9 +270,6 @@ class Puller:
                     low = middle
                 else:
                     high = middle
-        finally:
-            sim.problem.rigid.modes[:] = modes
-            sim.held = None
         return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
 
 
@@ -281,7 +293,7 @@ def write_snapshot_fields(puller, case_dir: Path) -> None:
 
 
 def pull_columns() -> list[str]:
-    return ["case", "method", "pulse_hz", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
+    return ["case", "method", "pulse_hz", "rotation", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
             "impulse_frames_Ns", "event", "force_over_pullout", "thesis_force_N", "thickness_mm", "rise_at_end_mm",
             "increments", "newton_iterations", "settled", "search", "wall_s"]
 
@@ -308,13 +320,13 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
         return {"metrics": metrics, "timings": {"wedge": puller.wedge_time}, "info": info}
     rows, method = [], s["method"]
     frequency = s["pulse_hz"] if method == "pulse" else 0.0
-    scale = puller.pullout["quasi_static_pullout_N"] / s["thesis_reference"]
+    scale = puller.pullout_force / s["thesis_reference"]
     for force, thesis in [(f, "") for f in s["forces"]] + [(round(f * scale, 6), f) for f in s["thesis_forces"]]:
         rows.append({**puller.pull(force, method, frequency), "search": False, "thesis_force_N": thesis})
     if s["search"]:
         metrics.update(puller.threshold(method, frequency, rows))
     for row in rows:
-        row.update(force_over_pullout=row["force_N"] / puller.pullout["quasi_static_pullout_N"],
+        row.update(force_over_pullout=row["force_N"] / puller.pullout_force,
                    thickness_mm=s["thickness"])
     if MPI.COMM_WORLD.rank == 0:
         with open(case_dir / "pulls.csv", "w", newline="") as stream:
@@ -401,8 +413,9 @@ THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowes
     (2, "continuous", 0.0): (None, 22.5), (2, "pulse", 10.0): (22.66, 22.67), (2, "pulse", 20.0): (22.6, 22.61),
     (2, "pulse", 30.0): (22.57, 22.58), (2, "pulse", 40.0): (22.55, 22.56), (2, "pulse", 50.0): (22.5, 22.55),
 }
-THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "thickness_mm", "threshold_force_N", "bracket_N", "quasi_static_pullout_N",
-                     "impulse_at_threshold_Ns", "time_at_threshold_s", "threshold_over_pullout", "one_dof_first_slip_N",
+THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "rotation", "thickness_mm", "threshold_force_N", "bracket_N",
+                     "quasi_static_pullout_N", "impulse_at_threshold_Ns", "time_at_threshold_s", "threshold_over_pullout",
+                     "one_dof_first_slip_N",
                      "one_dof_full_slide_N", "quasi_static_pullout_N_rotation_held", "thesis_threshold_N",
                      "thesis_over_thesis_continuous"]
 
@@ -433,8 +446,8 @@ def gather(study) -> tuple[list[dict], list[dict]]:
             pulls += _read_csv(case.dir / "pulls.csv")
         if "threshold_force_N" in metrics:
             hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
-            pullout = metrics["quasi_static_pullout_N"]
-            thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "",
+            pullout = metrics["quasi_static_pullout_N" + ("_rotation_held" if s["rotation"] == "held" else "")]
+            thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "", "rotation": s["rotation"],
                                "thickness_mm": s["thickness"], "quasi_static_pullout_N": pullout,
                                "quasi_static_pullout_N_rotation_held": metrics.get("quasi_static_pullout_N_rotation_held", ""),
                                "one_dof_first_slip_N": metrics["one_dof_first_slip_N"],
@@ -487,7 +500,7 @@ def render_snapshots(study) -> list[Path]:
 
 SUMMARY_COLUMNS = (["threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "time_at_threshold_s",
                     "threshold_over_pullout", "quasi_static_pullout_N", "thesis_threshold_N",
-                    "thesis_over_thesis_continuous", "case", "method", "pulse_hz", "thickness_mm"])
+                    "thesis_over_thesis_continuous", "case", "method", "pulse_hz", "rotation", "thickness_mm"])
 """The thresholds table at the head of the study's summary: the answer first, then the case."""
 
 
@@ -506,9 +519,78 @@ def summary_blocks(study) -> list[tuple]:
              [[units.format_value(row[name]) for name in SUMMARY_COLUMNS] for row in thresholds])]
 
 
+FRAME_COLUMNS = ["case", "method", "pulse_hz", "rotation", "force_N", "thesis_frame", "frame", "dislodge_time_s",
+                 "frame_difference", "within_one_frame", "thesis_impulse_Ns", "impulse_frames_Ns"]
+
+
+def thesis_frames(pulls: list[dict], thesis: list[dict], frame: float = 0.005) -> list[dict]:
+    """Row-by-row comparison with the thesis' table: every thesis cell (case, method, frequency,
+    force) that one of our pulls ran at the same force (to 1e-6 N). Our frame is ceil(t / frame),
+    frames numbered from the start of the pull (frame k ends at k x 0.005 s, the convention of the
+    thesis' 50 Hz cells); "" where one side did not dislodge. `within_one_frame`: both dislodged
+    within one frame of each other, or neither did."""
+    out = []
+    for ours in pulls:
+        method = "pulsed" if ours["method"] == "pulse" else "continuous"
+        hz = "" if method == "continuous" else f"{float(ours['pulse_hz']):g}"
+        match = [r for r in thesis if int(r["case"]) == int(ours["case"]) and r["method"] == method
+                 and r["pulse_hz"] == hz and abs(float(r["force_N"]) - float(ours["force_N"])) < 1e-6]
+        if not match:
+            continue
+        theirs = int(match[0]["dislodge_frame"]) if match[0]["dislodge_frame"] else None
+        mine = math.ceil(float(ours["dislodge_time_s"]) / frame - 1e-9) if ours["dislodged"] in (True, "True") else None
+        both = theirs is not None and mine is not None
+        out.append({**{k: ours[k] for k in ("case", "method", "pulse_hz", "rotation", "force_N", "dislodge_time_s",
+                                             "impulse_frames_Ns")},
+                    "thesis_frame": theirs if theirs is not None else "", "frame": mine if mine is not None else "",
+                    "frame_difference": mine - theirs if both else "",
+                    "within_one_frame": (abs(mine - theirs) <= 1) if both else (theirs is None and mine is None),
+                    "thesis_impulse_Ns": match[0]["impulse_Ns"]})
+    return out
+
+
+def absolute_impulse_plots(pulls: list[dict], thesis: list[dict], out: Path) -> list[Path]:
+    """caseN_impulse_vs_force_N.png: the frame-quantised impulse (and the exact one, dotted) of our
+    dislodging pulls against the peak force in N, beside the thesis' cells of the same method
+    (its Figures 4-7 to 4-10 on one plot): for a model whose thresholds are the thesis' own."""
+    import matplotlib.pyplot as plt
+
+    paths = []
+    for case in sorted({int(r["case"]) for r in pulls}):
+        fig, ax = plt.subplots(figsize=(8, 5))
+        mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
+        series = sorted({(r["method"], _number(r["pulse_hz"]) or 0.0, r.get("rotation") or "free") for r in mine})
+        for k, (method, hz, rotation) in enumerate(series):
+            rows = sorted((r for r in mine if (r["method"], _number(r["pulse_hz"]) or 0.0, r.get("rotation") or "free")
+                           == (method, hz, rotation)), key=lambda r: float(r["force_N"]))
+            name = "continuous" if method == "continuous" else f"{hz:g} Hz"
+            force = [float(r["force_N"]) for r in rows]
+            ax.plot(force, [float(r["impulse_frames_Ns"]) for r in rows], "o-", ms=3, lw=0.8, color=f"C{k}",
+                    label=f"model {name}, rotation {rotation}, to the frame")
+            ax.plot(force, [float(r["impulse_Ns"]) for r in rows], ":", lw=0.8, color=f"C{k}")
+            hz_text = "" if method == "continuous" else f"{hz:g}"
+            theirs = [(float(r["force_N"]), float(r["impulse_Ns"])) for r in thesis
+                      if int(r["case"]) == case and r["method"] == ("continuous" if method == "continuous" else "pulsed")
+                      and r["pulse_hz"] == hz_text and _number(r["impulse_Ns"]) is not None]
+            if theirs:
+                ax.plot(*zip(*sorted(theirs)), "x--", ms=4, lw=0.6, color=f"C{k}", label=f"thesis {name}")
+        ax.set_xlabel("peak pull force (N)")
+        ax.set_ylabel("impulse to dislodge (N s); dotted: to the event")
+        ax.set_title(f"case {case}: impulse against the peak force, ours and the thesis'")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+        fig.tight_layout()
+        path = out / f"case{case}_impulse_vs_force_N.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
 def report(study) -> list[Path]:
     """results/NAME/results.csv (one row per pull; replaces the runner's per-case export, which
-    stays in results.sqlite), thresholds.csv and the plots; returns the plot paths."""
+    stays in results.sqlite), thresholds.csv, thesis_frames.csv (the pulls at the thesis'
+    magnitudes against its table, `thesis_frames`) and the plots; returns the plot paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -524,19 +606,27 @@ def report(study) -> list[Path]:
     # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
     thesis_path = Path(__file__).resolve().parents[2] / "tests" / "data" / "dislodging_thesis.csv"
     thesis = _read_csv(thesis_path) if thesis_path.exists() else []
+    frames = thesis_frames(pulls, thesis)
+    if frames:
+        with open(out / "thesis_frames.csv", "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fieldnames=FRAME_COLUMNS, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(frames)
+        agree = sum(bool(r["within_one_frame"]) for r in frames)
+        print(f"thesis frames: {agree} of {len(frames)} rows within one frame (thesis_frames.csv)")
     paths = []
     for case in sorted({int(r["case"]) for r in pulls}):
         reference = THESIS_THRESHOLDS[(case, "continuous", 0.0)][1]
         for quantity, label in (("impulse_Ns", "impulse to dislodge (N s)"), ("dislodge_time_s", "time to dislodge (s)")):
             fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
             mine = [r for r in pulls if int(r["case"]) == case and r["dislodged"] == "True"]
-            key = lambda r: (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"]))
+            key = lambda r: (r["method"], _number(r["pulse_hz"]) or 0.0, float(r["thickness_mm"]), r.get("rotation") or "free")
             for k, series in enumerate(sorted({key(r) for r in mine})):
                 colour = f"C{k}"
                 rows = [r for r in mine if key(r) == series]
                 rows.sort(key=lambda r: float(r["force_N"]))
                 name = ("continuous" if series[0] == "continuous" else f"{series[1]:g} Hz") + \
-                    (f", {series[2]:g} mm" if series[2] != 1.0 else "")
+                    (f", {series[2]:g} mm" if series[2] != 1.0 else "") + (", rotation held" if series[3] == "held" else "")
                 x = [float(r["force_over_pullout"]) for r in rows]
                 frames = "impulse_frames_Ns" if quantity == "impulse_Ns" else None
                 axes[0].plot(x, [float(r[quantity]) for r in rows], "o-", ms=3, lw=0.6, color=colour, label=f"model {name}")
@@ -566,21 +656,22 @@ def report(study) -> list[Path]:
             fig.savefig(path, dpi=110)
             plt.close(fig)
             paths.append(path)
+    paths += absolute_impulse_plots(pulls, thesis, out)
     paths += render_snapshots(study)
     if thresholds:
         fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-        for case in sorted({r["case"] for r in thresholds}):
-            rows = [r for r in thresholds if r["case"] == case and r["method"] == "pulse" and r["thickness_mm"] == 1.0]
-            rows.sort(key=lambda r: float(r["pulse_hz"]))
+        for case, rotation in sorted({(r["case"], r["rotation"]) for r in thresholds}):
+            mine = [r for r in thresholds if r["case"] == case and r["rotation"] == rotation and r["thickness_mm"] == 1.0]
+            rows = sorted((r for r in mine if r["method"] == "pulse"), key=lambda r: float(r["pulse_hz"]))
             hz = [float(r["pulse_hz"]) for r in rows]
-            continuous = [r for r in thresholds if r["case"] == case and r["method"] == "continuous"
-                          and r["thickness_mm"] == 1.0]
-            axes[0].plot(hz, [r["threshold_force_N"] for r in rows], "o-", label=f"model case {case}")
+            continuous = [r for r in mine if r["method"] == "continuous"]
+            label = f"case {case}" + (", rotation held" if rotation == "held" else "")
+            axes[0].plot(hz, [r["threshold_force_N"] for r in rows], "o-", label=f"model {label}")
             axes[0].plot(hz, [r["thesis_threshold_N"] or np.nan for r in rows], "x--", label=f"thesis case {case}")
             if continuous:
                 axes[0].axhline(continuous[0]["threshold_force_N"], ls=":", color="k", lw=0.8)
             axes[1].plot(hz, [r["threshold_over_pullout"] or np.nan for r in rows], "o-",
-                         label=f"model case {case} / quasi-static pull-out")
+                         label=f"model {label} / quasi-static pull-out")
             axes[1].plot(hz, [r["thesis_over_thesis_continuous"] or np.nan for r in rows], "x--",
                          label=f"thesis case {case} / its continuous threshold")
         axes[0].set_ylabel("threshold peak force (N)")

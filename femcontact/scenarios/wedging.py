@@ -24,6 +24,14 @@ of its zones A and B). The peg is *wedged* when all of these hold:
    < 1e-3 deg, and 1 deg allows for the discretised contact-point position (the contact
    centres move by a fraction of an element, 0.08 mm at resolution 1, over l_2P ~ 40 mm).
 
+`tilt_change_deg` = loaded - initial tilt. For the thesis' published cases (d 40, D 40.1, mu 0.2,
+push (-5, 1) N, l_d = 4, 5, 6: `THESIS_CASES`) the thesis' values sit beside ours
+(`thesis_tilt_change_deg`, `thesis_residual_force_A`) with the ratios ours / thesis
+(`tilt_change_over_thesis`, `residual_over_thesis`), so a study of set-ups can be ranked.
+`push_friction_needed` is the least mu with which a rigid peg at the placement holds the first
+step's load (`scenarios.stability.friction_needed`): below the scene's mu the push alone cannot
+make a rigid peg slide.
+
 `wedge_reason` says which condition failed ("wedged" when none). The analytic condition
 l_crit <= l_d <= mu d (geometric, `femcontact.analytic`) is reported beside it
 (`analytic_wedged`, normalised depths `depth_over_l_crit`, `depth_over_l_max`, and
@@ -36,12 +44,34 @@ import math
 import numpy as np
 
 from femcontact.references import peg_in_hole as analytic
+from femcontact.scenarios.stability import friction_needed
+from geometry.placement import peg_pose
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
 STABILIZATION_TOL = 1e-3  # stabilisation force after release / residual force
 IMBALANCE_TOL = 1e-3      # |R_A + R_B| / |R_A|
 ANGLE_TOL_DEG = 1.0       # deviation of a reaction from the line of the contact points
 BOUNDARY_BAND = 0.05      # |l_d - bound| / l_max below which a case counts as "near a boundary"
+
+THESIS_CASES = {  # l_d (mm): tilt initial, loaded, released (deg), R_A (x, y) (N); thesis Table 3-3
+    4.0: (1.6784, 3.6418, 3.6224, 13.256854, -0.434447),
+    5.0: (1.2560, 2.0619, 2.0402, 11.723917, -0.987158),
+    6.0: (1.0148, 1.4898, 1.4629, 9.400392, -1.106843),
+}
+
+
+def thesis_metrics(scene: dict, out: dict) -> dict:
+    """The thesis' tilt change and residual reaction beside ours, for a scene of its wedging
+    cases (d 40, D 40.1, mu 0.2, first step the push (-5, 1) N); {} for any other scene."""
+    published = THESIS_CASES.get(scene["peg"]["insertion_depth"])
+    push = scene["steps"][0]["force"]
+    if not published or (scene["peg"]["width"], scene["hole"]["width"], scene["contact"]["mu"]) != (40.0, 40.1, 0.2) \
+            or list(push) != [-5.0, 1.0] or scene["steps"][0]["moment"]:
+        return {}
+    change, residual = published[1] - published[0], float(np.hypot(published[3], published[4]))
+    return {"thesis_tilt_change_deg": change, "thesis_residual_force_A": residual,
+            "tilt_change_over_thesis": out["tilt_change_deg"] / change,
+            "residual_over_thesis": out["residual_force_A"] / residual}
 
 
 def _vector(row: dict, prefix: str, dim: int) -> np.ndarray:
@@ -67,6 +97,15 @@ def analytic_metrics(scene: dict) -> dict:
     return out
 
 
+def push_friction_needed(scene: dict) -> float | None:
+    """The least mu with which a rigid peg at the two-point placement holds the first step's load
+    (`scenarios.stability.friction_needed`); None for a load point the placement does not name
+    (the peg's reference point) or a scene without a two-point placement."""
+    if scene["dim"] != 2 or scene["steps"][0]["load_point"] not in peg_pose(scene).points:
+        return None
+    return friction_needed(scene)
+
+
 def load_scale(scene: dict, history: list[dict]) -> float:
     """Peak applied force (N), or for moments the force of the couple over l_2P, whichever is larger."""
     dim = scene["dim"]
@@ -88,6 +127,7 @@ def wedge_metrics(simulation) -> dict:
         last_loaded = max((i for i, row in enumerate(history) if row["step"] != final["step"]), default=-1)
     loaded = [row["tilt_deg"] for row in history[: last_loaded + 1]]
     out["tilt_loaded_deg"] = max(loaded, key=abs) if loaded else final["tilt_deg"]
+    out["tilt_change_deg"] = out["tilt_loaded_deg"] - out["tilt_initial_deg"]
     released = history[last_loaded + 1:] or [final]
     out["stabilization_force_released"] = float(max(row.get("stabilization_force", 0.0) for row in released))
     forces = {}
@@ -132,5 +172,7 @@ def wedge_metrics(simulation) -> dict:
     out["wedge_reason"] = reason
     out["wedged"] = reason == "wedged"
     out.update(analytic_metrics(scene))
+    out.update(thesis_metrics(scene, out))
+    out["push_friction_needed"] = push_friction_needed(scene)
     out["wall_time_s"] = float(sum(simulation.timings.values()))
     return out

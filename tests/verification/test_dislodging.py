@@ -281,3 +281,24 @@ def test_a_high_friction_peg_holds_below_and_leaves_above_its_own_pullout():
     assert pullout > 0
     assert not peg.pull(0.98 * pullout, "continuous")["dislodged"]
     assert peg.pull(1.02 * pullout, "continuous")["dislodged"]
+
+
+def test_a_pull_that_holds_the_rotation_needs_the_held_pullout(wedged_peg):
+    """`dislodging.rotation = "held"`: the peg can only translate during the pull, so it must slide
+    at both contacts. A constant pull 2 % under the held quasi-static pull-out holds, 2 % over it
+    dislodges, and both are far above the free peg's pull-out (3.2x at resolution 1: 18.05
+    against 5.62 N), as the thesis' thresholds (20.2 N) are above a free peg's."""
+    held = wedged_peg.pullout["quasi_static_pullout_N_rotation_held"]
+    assert held > 3 * wedged_peg.pullout["quasi_static_pullout_N"]
+    rise = wedged_peg.settings["rise"]
+    # a held peg slides out at both contacts with every increment capped at a 1e-3 mm rise: a
+    # 0.05 mm event rise (not 0.5) keeps the dislodging pull at ~70 increments
+    wedged_peg.rotation_held, wedged_peg.settings["rise"] = True, 0.05
+    try:
+        below = wedged_peg.pull(0.98 * held, "continuous")
+        above = wedged_peg.pull(1.02 * held, "continuous")
+    finally:
+        wedged_peg.rotation_held, wedged_peg.settings["rise"] = False, rise
+    assert not below["dislodged"] and abs(below["rise_at_end_mm"]) < 1e-3
+    assert above["dislodged"] and above["event"] == "risen" and above["rotation"] == "held"
+    assert wedged_peg.simulation.problem.rigid.modes[2] == "free"  # the hold is undone after the pull
