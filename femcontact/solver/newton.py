@@ -69,8 +69,8 @@ class SchurNewton:
         self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
         self.bc_dofs = p.support_dof_set
         self.linear = linear_solver(p, prefix, self._near_nullspace)
-        self.stabilization = np.zeros((n_r, n_r))  # spring tying the rigid body to `anchor` (N/mm, N*mm)
-        self.anchor = np.zeros(n_r)  # the pose the stabilisation spring ties the body to (mm, rad)
+        self.stabilization = np.zeros((n_r, n_r))  # spring tying the rigid body to `tie_pose` (N/mm, N*mm)
+        self.tie_pose = np.zeros(n_r)  # the pose the stabilisation spring ties the body to (mm, rad)
         self._assembled = None  # (load, u, r, residual) of the last residual assembly
 
     def _near_nullspace(self) -> PETSc.NullSpace:
@@ -112,7 +112,7 @@ class SchurNewton:
         contact = self.b_contact.array_r
         G = np.array([self._allsum(float(mode @ contact)) for mode in self._modes()])
         Q_ext = load.generalized_force(p.rigid.values)
-        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization @ (p.rigid.values - self.anchor)
+        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization @ (p.rigid.values - self.tie_pose)
         R_u = self.b_bulk.copy()
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
@@ -144,24 +144,24 @@ class SchurNewton:
         c = self.problem.constants
         return np.finfo(float).eps * self.problem.extent * float(c["gamma"].value * c["E"].value) / self.problem.model.h_contact
 
-    def stabilize(self, factor: float, anchor=None) -> None:
+    def stabilize(self, factor: float, tie_pose=None) -> None:
         """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm; rotations
-        scaled by the body size squared) tying the rigid body to `anchor` (default: its last
+        scaled by the body size squared) tying the rigid body to `tie_pose` (default: its last
         converged pose). `factor` scales it (0 = off). It gives a body with no contact yet a
         finite stiffness, as Abaqus' contact stabilisation does; the stepper then removes it by
-        continuation, or moves the anchor along in pseudo time (see Simulation.increment)."""
+        continuation, or moves that pose along in pseudo time (see Simulation.increment)."""
         p = self.problem
         k = float(p.constants["E"].value) * p.model.h_contact
         size = p.shape["scale"]
         scale = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size * size)
         self.stabilization = factor * np.diag(k * scale)
-        self.anchor = p.rigid.r_old.value.copy() if anchor is None else np.array(anchor, dtype=float)
+        self.tie_pose = p.rigid.r_old.value.copy() if tie_pose is None else np.array(tie_pose, dtype=float)
 
     def stabilization_force(self) -> float:
         """The stabilisation spring's load on the rigid body at the current pose: |force| plus
         |moment| over the body size (N)."""
         p = self.problem
-        force = self.stabilization @ (p.rigid.values - self.anchor)
+        force = self.stabilization @ (p.rigid.values - self.tie_pose)
         return float(np.linalg.norm(force[: p.dim]) + np.linalg.norm(force[p.dim:]) / p.shape["scale"])
 
     def solve(self, load) -> int:

@@ -257,7 +257,7 @@ class Simulation:
         try:
             while failures < PSEUDO_FAILURES and spent < PSEUDO_ITERATIONS:
                 start = p.state()
-                self.newton.stabilize(factor, anchor=p.rigid.values)
+                self.newton.stabilize(factor, tie_pose=p.rigid.values)
                 try:
                     taken = self.newton.solve(load)
                 except NewtonFailure as failure:
