@@ -32,7 +32,7 @@ def case(tmp_path, number: int, method: str, hz: float, threshold: float, pullou
             writer.writerow({"case": number, "method": method, "pulse_hz": hz if method == "pulse" else "",
                              "force_N": force, "dislodged": time is not None, "dislodge_time_s": time or "",
                              "thickness_mm": 1.0})
-    scene = {"dislodging": {"case": number, "method": method, "pulse_hz": hz, "thickness": 1.0}}
+    scene = {"dislodging": {"case": number, "method": method, "pulse_hz": hz, "rotation": "free", "thickness": 1.0}}
     return SimpleNamespace(dir=directory, scene=scene)
 
 
