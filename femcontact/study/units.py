@@ -78,6 +78,7 @@ LABELS = {
     "case": "thesis case",
     "method": "pull",
     "pulse_hz": "pulse frequency (Hz)",
+    "rotation": "peg rotation in the pull",
     "thickness_mm": "thickness (mm)",
     "degree_of_wedging": "degree of wedging P / (mu (N_A + N_B))",
     "dislodging.case": "thesis case",

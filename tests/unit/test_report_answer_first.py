@@ -42,7 +42,7 @@ def test_dislodging_summary_leads_with_the_thresholds(tmp_path):
     blocks = dislodging.summary_blocks(SimpleNamespace(cases=cases))
     kind, header, body = blocks[-1]
     assert kind == "table" and header[:2] == ["threshold pull (N)", "threshold bracket (N)"]
-    assert header[-4:] == ["thesis case", "pull", "pulse frequency (Hz)", "thickness (mm)"]
+    assert header[-5:] == ["thesis case", "pull", "pulse frequency (Hz)", "peg rotation in the pull", "thickness (mm)"]
     column = {name: k for k, name in enumerate(dislodging.SUMMARY_COLUMNS)}
     continuous, pulsed = body
     assert continuous[column["threshold_force_N"]] == "20.5" and continuous[column["time_at_threshold_s"]] == "0.031"
