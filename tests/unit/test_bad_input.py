@@ -1,4 +1,4 @@
-"""Bad input and faults (issue 11): every bad value is refused before anything runs, with exit
+"""Bad input and faults: every bad value is refused before anything runs, with exit
 code 2 and one message naming the key or the file, no traceback and nothing written; a
 read-only or full results directory ends with one message, no temporary files and a
 database that agrees with the case directories.
