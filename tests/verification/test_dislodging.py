@@ -1,5 +1,5 @@
 """Dynamics through contact changes (femcontact.scenarios.dynamics) against exact solutions, and the
-dislodging scenario's bookkeeping against the thesis' numbers (reference §2)."""
+dislodging scenario's bookkeeping against the thesis' numbers (ch. 4)."""
 import csv
 import math
 from pathlib import Path
