@@ -21,6 +21,7 @@ HISTORY = re.compile("|".join([
     r"\bgoals? of (the )?issue\b",
     r"(?:^|[\s(\[])#\d{1,4}\b(?![;\w])",                       # "#12" (not a colour "#222;")
     r"\bpull request\b",
+    r"\bthe issue's\b|\(issue\)",
     r"\b(this|that|an earlier|a previous|the previous|another|a later|the next) session('s)?\b",
     r"\b(other |a |the )?helpers?'s? (branch|jobs?|runs?|work|session)\b",
     r"\bother helpers\b",
@@ -71,7 +72,8 @@ def test_the_patterns_catch_history_and_spare_physics():
     history = ["the solver change of issue 12", "Goals of issue 12", "see #14 for", "this session's solver",
                "other helpers' jobs", "this branch merged with main's update", "before the last merge",
                "reported to the lead", "from a clean clone of 1225964", "(commit e18e21b)", "at 1c483a5",
-               "before this change", "the working tree of b53d2e2"]
+               "before this change", "the working tree of b53d2e2",
+               "the issue's Moreau-Jean option", "0.63 of the thesis' (issue)"]
     physics = ["the one-point branch closes", "a quiet gmsh session", "no helper daemon",
                "cases before duplicates are merged", "color: #222;", "at 1000000 N", "the chamfer branch",
                "the leading dim x dim block", "GetFEM merges regions", "in its own session"]
