@@ -138,7 +138,7 @@ stability: setup
 clean:
 	rm -rf results
 
-# Beyond the thesis' dislodging (issue 14): studies/dislodging_beyond_2d.toml, then
+# Beyond the thesis' dislodging (lateral and moment pulses, pull plus shake): studies/dislodging_beyond_2d.toml, then
 # results/dislodging_beyond/; `make dislodging_beyond_3d` adds the 3-D thresholds (2 ranks),
 # `make dislodging_beyond_frequency` the ways out at 10 and 200 Hz and the peak-force optimum.
 dislodging_beyond: STUDY_FILE := studies/dislodging_beyond_2d.toml

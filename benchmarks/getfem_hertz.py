@@ -1,4 +1,4 @@
-"""GetFEM driver for the Hertz benchmark (reference §5), for `make bench` to time against.
+"""GetFEM driver for the Hertz benchmark (docs/references.md), for `make bench` to time against.
 
     python benchmarks/getfem_hertz.py --contact-size H [--degree 1|2] [--increments N] --json
 

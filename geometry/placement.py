@@ -8,7 +8,7 @@ Peg local frame: origin at the centre of the peg tip, 2-D (xi, eta), 3-D
 global = origin + rotation @ local. A positive tilt turns the peg
 counter-clockwise in the x-y (3-D: x-z) plane, so its top leans towards -x.
 
-Placement 'two_point' (reference §1): the peg-side point A (local (-d/2, l_d))
+Placement 'two_point' (the thesis, ch. 3): the peg-side point A (local (-d/2, l_d))
 rests on the lowest corner of block A's mouth (x = -D/2 + gap; below a hole
 chamfer when there is one) and the tip corner B (local (d/2, 0), or the top of
 the peg-tip chamfer, or the tangent point of a rounded corner) touches wall B

@@ -1,4 +1,4 @@
-"""Two-point contact of a peg in a hole: the closed forms placement needs (reference §1).
+"""Two-point contact of a peg in a hole: the closed forms placement needs (the thesis, ch. 3).
 
 d: peg width/diameter, D: hole width/diameter (mm), l_d: insertion depth along the
 peg from its tip to the contact point at the hole's mouth (mm). Angles in radians.

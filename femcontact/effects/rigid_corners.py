@@ -13,9 +13,9 @@ point. The force enters the contact vector C at the segment's two nodes, so the
 rigid-body rows of the Newton system follow from C as for the integral terms. The
 element's Jacobian is taken by central differences with the contact state frozen.
 
-In 3-D the rims of a rigid cylinder are not treated this way (yet): an attempt with
-node-to-triangle rim points did not converge (commit e18e21b, docs/wedging_3d.md); the
-rim is seen once the wall nodes next to it touch the peg's side.
+In 3-D the rims of a rigid cylinder are not treated this way: node-to-triangle rim points
+do not converge (docs/wedging_3d.md); the rim is seen once the wall nodes next to it touch
+the peg's side.
 """
 import numpy as np
 from mpi4py import MPI

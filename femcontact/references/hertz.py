@@ -6,7 +6,7 @@ elastic block: E* = E / (1 - nu^2), a = sqrt(4 P R / (pi E*)), p0 = 2 P / (pi a)
 import math
 
 BENCHMARK = {"P": 500.0, "R": 50.0, "E": 200000.0, "nu": 0.3, "width": 100.0, "height": 50.0}
-"""Reference §5: load (N/mm), cylinder radius (mm), block modulus (MPa), Poisson ratio, block size (mm)."""
+"""The benchmark (docs/references.md): load (N/mm), cylinder radius (mm), block modulus (MPa), Poisson ratio, block size (mm)."""
 
 
 def analytic(P: float, R: float, E: float, nu: float) -> tuple[float, float]:

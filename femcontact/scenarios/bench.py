@@ -271,7 +271,7 @@ def effect_costs() -> list[dict]:
 
 def goals(codes: list[dict], skipped: str, wedging: dict, wedging3d: list | None = None,
           overhead: dict | None = None, variants: list | None = None) -> list[list[str]]:
-    """Issue 12's goals as measured in this run: [goal, measured, ratio, holds]."""
+    """The performance goals (docs/bench.md) as measured in this run: [goal, measured, ratio, holds]."""
     out = []
     hertz_max = max([max(r["newton_per_increment"]) for r in codes if r["code"].startswith("femcontact")], default=0)
     cases = [("wedging 2-D, load and release", [wedging])]

@@ -33,10 +33,9 @@ from femcontact.physics.rotation import cross_with_axis, rigid_modes
 from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
 ROOT_EVALUATIONS = 12
-"""Residual assemblies the line search spends at most on the root of the slope g(alpha) (where g
-jumps at a stick/slip switch, the bracket must shrink by 2^6 and more to find its band: 6
-evaluations gave 1,599 assemblies / 514 directions over the bench's 13 2-D wedging cases, 12
-gave 1,062 / 421 with SWITCH_EVALUATIONS = 4)."""
+"""Residual assemblies the line search spends at most on the root of the slope g(alpha): where g
+jumps at a stick/slip switch the bracket must shrink by 2^6 and more to find the switch's band
+(docs/bench.md compares the counts over the bench's wedging cases)."""
 SWITCH_EVALUATIONS = 4
 """Residual assemblies the line search spends at most on landing inside a switch (`_into_switch`)."""
 FLAT_SHRINK = 1 / 64

@@ -1,4 +1,4 @@
-"""Bad input and faults (issue 11): every bad value is refused before anything runs, with exit
+"""Bad input and faults: every bad value is refused before anything runs, with exit
 code 2 and one message naming the key or the file, no traceback and nothing written; a
 read-only or full results directory ends with one message, no temporary files and a
 database that agrees with the case directories.
@@ -54,7 +54,7 @@ def sets(*assignments) -> list[str]:
 # -- scene values: each refused by `femcontact run` before the output directory exists --------------
 
 RUN_CASES = [
-    # the two hangs and the crash of the issue
+    # values that would hang gmsh or crash it without these checks
     (["hole.block_width=inf"], ["hole.block_width = inf: not a finite number"]),
     (["hole.depth=inf"], ["hole.depth = inf: not a finite number"]),
     (["mesh.resolution=1e4"], ["mesh too large", "mesh.resolution = 10000"]),

@@ -18,7 +18,7 @@ def test_pulse_area_per_period(shape, area):
 
 
 def test_thesis_pulse_impulse():
-    """Reference §2: 50 Hz triangular pulses of 20.2 N, 4 pulses = 4 * 0.02 * 20.2 / 2 N*s."""
+    """The thesis, ch. 4: 50 Hz triangular pulses of 20.2 N, 4 pulses = 4 * 0.02 * 20.2 / 2 N*s."""
     t = np.linspace(0, 0.08, 80001)
     force = 20.2 * np.array([pulse(x, 50.0, 1.0, "triangle") for x in t])
     assert np.trapz(force, t) == pytest.approx(4 * 0.02 * 20.2 / 2, rel=1e-6)

@@ -22,7 +22,7 @@ def simulate(data: dict) -> Simulation:
 
 
 def wedging(**overrides) -> dict:
-    """The thesis wedging scene (reference §1) on a coarse mesh."""
+    """The thesis wedging scene (ch. 3) on a coarse mesh."""
     data = {
         "name": "wedging", "dim": 2, "geometry": "peg_in_hole", "rigid": "peg", "effects": ["friction", "plane_strain"],
         "peg": {"width": 40.0, "length": 10.0, "insertion_depth": 5.0},

@@ -1,4 +1,4 @@
-"""The new load kinds of issue 14 (lateral pulses, moment pulses, pull plus shake) against exact
+"""The dislodging load kinds beyond a plain pull (lateral pulses, moment pulses, pull plus shake) against exact
 free-body solutions, and the pulse optimiser's verification step (femcontact.scenarios.dislodging_beyond)."""
 from pathlib import Path
 

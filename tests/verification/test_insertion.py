@@ -96,7 +96,7 @@ def test_a_bad_stiffness_matrix_is_refused_naming_the_key():
 
 
 def test_rcc_support_reduces_to_the_x_z_plane():
-    """The RCC design formula (reference §3) in 2-D: K_x = 3 k cos^2, K_z = 6 k sin^2, K_theta = k b^2 sin^2."""
+    """The RCC design formula (the thesis, ch. 5) in 2-D: K_x = 3 k cos^2, K_z = 6 k sin^2, K_theta = k b^2 sin^2."""
     from femcontact.effects.compliant_support import stiffness_matrix
 
     scene = load_scene(SCENE, ["support.model='rcc'", "support.rcc={b=50.0, "

@@ -1,4 +1,4 @@
-"""Snap fit (Whitney ch. 11, issue 16): statics of a sliding flat taper, the spring's stiffness
+"""Snap fit (Whitney ch. 11): statics of a sliding flat taper, the spring's stiffness
 against cantilever theory, jamming against the friction cone, on coarse meshes.
 
 Convention (femcontact.references.snap_fit): alpha is the taper's half-angle from the insertion

@@ -1,4 +1,4 @@
-"""Snap fit in 3-D (issue 16), coarse: scenes/snap_fit_3d.toml, the 2-D scene's spring swept across
+"""Snap fit in 3-D, coarse: scenes/snap_fit_3d.toml, the 2-D scene's spring swept across
 its 1 mm width (quadratic tetrahedra, 2 across the thickness, 4 layers across the width) and a
 blade pin whose flat-taper section is the same in every plane z = const. The checks of the 2-D
 scene hold with forces in N over the whole width: the flat taper's force ratio equals the statics

@@ -1,5 +1,5 @@
 """Statics of a rigid peg in two-point contact (femcontact.references.two_point_statics) against
-the wedging condition of reference §1 and against contact forces built inside the friction cones."""
+the wedging condition (the thesis, ch. 3) and against contact forces built inside the friction cones."""
 import math
 from pathlib import Path
 
@@ -22,7 +22,7 @@ def pose(depth: float, clearance: float = 1e-8, width: float = 40.0):
 @pytest.mark.parametrize("depth", [2.0, 5.0, 9.0])
 def test_a_push_along_the_axis_needs_the_wedging_friction(depth):
     """Pushed straight in (or pulled straight out) at the peg top, the peg in two-point contact
-    jams exactly in the wedging range l < mu d (reference §1): it needs mu = l/d, to the order of
+    jams exactly in the wedging range l < mu d (the thesis, ch. 3): it needs mu = l/d, to the order of
     the tilt (here 1e-8 rad; the contact forces grow without bound towards that limit)."""
     placed = pose(depth)
     contacts = statics.peg_in_hole_contacts(placed)

@@ -1,4 +1,4 @@
-"""Wedging, reference §1 (thesis 2-D cases): classification, balance, tilt, stresses.
+"""Wedging, the thesis ch. 3 (its 2-D cases): classification, balance, tilt, stresses.
 
 The thesis' four cases (d 40, D 40.1, mu 0.2, push Fx = -5, Fy = 1 N on the peg top, then
 release) on a coarse mesh (`mesh.resolution = 0.5`, ~4x fewer triangles than the default;

@@ -1,4 +1,4 @@
-"""3-D wedging (issue 6): a rigid cylindrical peg wedged in a round hole by a couple and released.
+"""3-D wedging: a rigid cylindrical peg wedged in a round hole by a couple and released.
 
 One coarse case (scenes/wedging_3d.toml at resolution 0.5, ~3k dofs, ~25 s on one rank):
 after the couple is removed the peg must stay wedged: both contact zones keep a resultant
