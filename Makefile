@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm study bench accuracy stability clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm study bench bench_hertz_3d accuracy stability clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -93,6 +93,11 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+	$(PY) -m femcontact.scenarios.bench_hertz_3d
+
+# The 3-D Hertz benchmark beside GetFEM alone (also the end of `make bench`): results/bench/hertz_3d.md
+bench_hertz_3d: setup
+	$(PY) -m femcontact.scenarios.bench_hertz_3d
 
 # What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
 accuracy: setup
