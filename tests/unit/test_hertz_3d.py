@@ -54,3 +54,29 @@ def test_surface_is_the_top_face_by_radius(output):
 def test_a_and_p0_against_the_closed_form(output):
     assert abs(output["error_a"]) < 0.08
     assert abs(output["error_p0"]) < 0.05
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"dim": 2, "block": {"symmetry": "none"}, "steps": [{"force": [0.0, -1.0]}]}, "indenter.shape = 'sphere'"),
+    ({"rigid_body": {"dofs": {"x": "free"}}}, "rigid_body.dofs.x"),
+    ({"steps": [{"force": [1.0, 0.0, -500.0]}]}, "steps[0]"),
+])
+def test_a_quarter_model_or_sphere_it_cannot_hold_is_an_input_error(change, named):
+    from femcontact.config.scene import resolve
+    from femcontact.errors import InputError
+    from femcontact.scenarios.hertz import scene_3d
+
+    data = scene_3d(benchmark_radius_3d() / 2.5)
+    for key, value in change.items():
+        if key == "steps":
+            data["steps"][0].update(value[0])
+        elif isinstance(value, dict):
+            for sub, item in value.items():
+                data[key][sub] = {**data[key][sub], **item} if isinstance(item, dict) else item
+        else:
+            data[key] = value
+    if data["dim"] == 2:
+        data.pop("effects")
+        data["rigid_body"]["dofs"] = {}
+    with pytest.raises(InputError, match=named.replace("[", r"\[").replace("]", r"\]").replace(".", r"\.")):
+        resolve(data)
