@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench bench_hertz_3d accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -122,6 +122,11 @@ $(STUDIES): %: setup
 
 bench: setup
 	$(PY) -m femcontact.scenarios.bench
+	$(PY) -m femcontact.scenarios.bench_hertz_3d
+
+# The 3-D Hertz benchmark beside GetFEM alone (also the end of `make bench`): results/bench/hertz_3d.md
+bench_hertz_3d: setup
+	$(PY) -m femcontact.scenarios.bench_hertz_3d
 
 # Plasticity on the wedging case, an edge radius under refinement, its cost; results/plasticity/plasticity.md
 plasticity: setup

@@ -5,8 +5,10 @@ z in [-h, 0] (front: y = -depth/2, back: y = +depth/2). The indenter touches the
 at the origin. Fine zone: 2-D, the top edge between x = -z and z = +z has exactly
 uniform node spacing h_contact with a node at x = 0 (transfinite curve; the zone
 half-length z is rounded to a whole number k of elements, z = k*h_contact); 3-D, the top
-strip |x| <= z (cylinder indenter) or the top disc of radius z (flat punch). Away from
-the zone the size grows linearly (gmsh_tools.GRADING) up to the maximum size.
+strip |x| <= z (cylinder indenter) or the top disc of radius z (sphere, flat punch). Away
+from the zone the size grows linearly (gmsh_tools.GRADING) up to the maximum size.
+3-D with block.symmetry = 'quarter': only x >= 0, y >= 0 is meshed, its faces x = 0 and
+y = 0 named symmetry_x and symmetry_y (their normal displacement held).
 """
 import math
 
@@ -19,7 +21,7 @@ def sizes(scene: dict) -> gmsh_tools.Sizes:
     and for a flat indenter at least 0.6 times its width (covering its edges)."""
     block, indenter = scene["block"], scene["indenter"]
     scale = min(block["width"], block["height"])
-    zone = scale / 10 if indenter["shape"] == "cylinder" else max(scale / 10, 0.6 * indenter["width"])
+    zone = max(scale / 10, 0.6 * indenter["width"]) if indenter["shape"] == "flat" else scale / 10
     return gmsh_tools.sizes(scene["mesh"], scale / 100, scale / 5, zone)
 
 
@@ -62,18 +64,21 @@ def _generate_3d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     w, h, depth = block["width"], block["height"], block["depth"]
     if sz.zone >= w / 2:
         raise InputError(f"mesh.contact_zone = {sz.zone:.6g}: the fine zone must be narrower than the block")
-    volume = gmsh.model.occ.addBox(-w / 2, -depth / 2, -h, w, depth, h)
+    quarter = bool(symmetry_planes(scene))
+    x0, y0 = (0.0, 0.0) if quarter else (-w / 2, -depth / 2)
+    volume = gmsh.model.occ.addBox(x0, y0, -h, w / 2 - x0, depth / 2 - y0, h)
     gmsh.model.occ.synchronize()
+    sides = {(0, x0): "symmetry_x" if quarter else "left", (0, w / 2): "right",
+             (1, y0): "symmetry_y" if quarter else "front", (1, depth / 2): "back", (2, -h): "bottom", (2, 0.0): "top"}
     faces = {}
     for _, tag in gmsh.model.getBoundary([(3, volume)], oriented=False):
         c = gmsh.model.occ.getCenterOfMass(2, tag)
-        name = {(0, -w / 2): "left", (0, w / 2): "right", (1, -depth / 2): "front", (1, depth / 2): "back",
-                (2, -h): "bottom", (2, 0.0): "top"}
-        faces[next(v for (axis, value), v in name.items() if math.isclose(c[axis], value, abs_tol=1e-9 * w))] = [tag]
+        faces[next(v for (axis, value), v in sides.items() if math.isclose(c[axis], value, abs_tol=1e-9 * w))] = [tag]
     lateral = "Abs(x)" if scene["indenter"]["shape"] == "cylinder" else "Sqrt(x^2+y^2)"
     gmsh_tools.background([gmsh_tools.graded(sz, f"Sqrt(Max(0, {lateral}-{sz.zone!r})^2+z^2)")])
     cells = gmsh_tools.add_groups(3, {"block": [volume]})
-    facets = gmsh_tools.add_groups(2, {n: faces[n] for n in ("top", "bottom", "left", "right", "front", "back")})
+    order = ("top", "bottom", sides[0, x0], "right", sides[1, y0], "back")
+    facets = gmsh_tools.add_groups(2, {n: faces[n] for n in order})
     gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.45)  # optimise tetrahedra of quality below this
     gmsh.model.mesh.generate(3)
     return {"facets": facets, "cells": cells}
@@ -82,4 +87,9 @@ def _generate_3d(scene: dict, sz: gmsh_tools.Sizes) -> dict:
 def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     """Build and mesh the block (current gmsh model, this rank only); returns the tag names."""
     names = _generate_2d(scene, sz) if scene["dim"] == 2 else _generate_3d(scene, sz)
-    return {**names, "contact_facets": ["top"], "supports": ["bottom"]}
+    return {**names, "contact_facets": ["top"], "supports": ["bottom"], "symmetry": symmetry_planes(scene)}
+
+
+def symmetry_planes(scene: dict) -> dict[str, int]:
+    """Facet tag name -> the displacement component its symmetry plane holds (0: x, 1: y)."""
+    return {"symmetry_x": 0, "symmetry_y": 1} if scene["block"].get("symmetry") == "quarter" else {}

@@ -49,15 +49,16 @@ def _body(scene: dict, sz):
     fine set, the smallest distance (-zone for balls: h_c inside them))."""
     dim, z = scene["dim"], sz.zone
     if scene["geometry"] == "block":
-        block, flat = scene["block"], scene["indenter"]["shape"] == "flat"
+        block = scene["block"]
         if dim == 2:
             zone = max(1, round(z / sz.h_contact)) * sz.h_contact
             return block["width"] * block["height"], lambda d: 2 * zone * d + math.pi * d * d / 2, 0.0
-        volume = block["width"] * block["depth"] * block["height"]
-        if flat:  # a disc of radius z on the top face
-            return volume, lambda d: math.pi * z * z * d + math.pi ** 2 * z * d * d / 2 + 2 * math.pi * d ** 3 / 3, \
-                0.0
-        return volume, lambda d: block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0  # a strip |x| <= z
+        part = 0.25 if block["symmetry"] == "quarter" else 1.0  # a quarter: a quarter of each
+        volume = part * block["width"] * block["depth"] * block["height"]
+        if scene["indenter"]["shape"] != "cylinder":  # a disc of radius z on the top face
+            return volume, lambda d: part * (math.pi * z * z * d + math.pi ** 2 * z * d * d / 2
+                                             + 2 * math.pi * d ** 3 / 3), 0.0
+        return volume, lambda d: part * block["depth"] * (2 * z * d + math.pi * d * d / 2), 0.0  # a strip |x| <= z
     if scene["geometry"] == "snap_fit":  # a disc of radius z around each spring's apex, a quarter inside
         spring = scene["spring"]          # (3-D: swept across the width)
         depth = 1.0 if dim == 2 else spring["width"]

@@ -5,7 +5,7 @@ builder (peg_hole_2d, peg_hole_3d, block, snap_fit). Each builder has `sizes(sce
 every rank) and `generate(scene, sizes)` (gmsh, on rank 0 only, returning the tag names);
 `rigid_body(scene)` and `points(scene)` are pure geometry, computed on every rank.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +16,8 @@ class Model:
     """mesh, cell_tags, facet_tags: DOLFINx objects; facets/cells: tag name -> tag value;
     rigid: analytic description of the rigid body (docs/geometry.md); points: named global
     points (mm); contact_facets: facet tags that may touch the rigid body; supports: facet
-    tags to fix; h_contact: element size in the contact zones (mm)."""
+    tags to fix; h_contact: element size in the contact zones (mm); symmetry: facet tag name
+    -> the displacement component (0: x, 1: y) held on that symmetry plane."""
     mesh: object
     cell_tags: object
     facet_tags: object
@@ -27,6 +28,7 @@ class Model:
     contact_facets: list
     supports: list
     h_contact: float
+    symmetry: dict = field(default_factory=dict)
 
 
 def builder(scene: dict):
@@ -58,10 +60,10 @@ def rigid_body(scene: dict) -> dict:
     identity = {"origin": np.zeros(dim), "rotation": np.eye(dim), "tilt": 0.0}
     if scene["geometry"] == "block":
         ind = scene["indenter"]
-        if ind["shape"] == "cylinder":
+        if ind["shape"] in ("cylinder", "sphere"):
             R = ind["radius"]
-            return {**identity, "shape": "disc" if dim == 2 else "cylinder_y", "radius": R,
-                    "origin": np.eye(dim)[dim - 1] * R}
+            shape = "disc" if dim == 2 else "cylinder_y" if ind["shape"] == "cylinder" else "sphere"
+            return {**identity, "shape": shape, "radius": R, "origin": np.eye(dim)[dim - 1] * R}
         flat = {"length": ind["width"], "corner_radius": 0.0, "chamfer_width": 0.0, "chamfer_angle": 45.0}
         if dim == 2:
             return {**identity, "shape": "rectangle", "half_width": ind["width"] / 2, **flat}
@@ -140,7 +142,7 @@ def build(scene: dict, comm, msh_path=None) -> Model:
     return Model(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, facets=names["facets"],
                  cells=names["cells"], rigid=rigid_body(scene), points=points(scene),
                  contact_facets=names["contact_facets"], supports=names["supports"],
-                 h_contact=sizes.h_contact)
+                 h_contact=sizes.h_contact, symmetry=names.get("symmetry", {}))
 
 
 def write(model: Model, path) -> None:

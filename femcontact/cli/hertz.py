@@ -1,11 +1,13 @@
-"""`femcontact hertz`: the Hertz benchmark (docs/references.md) at one contact-zone size, for timing
-against other codes.
+"""`femcontact hertz`: a Hertz benchmark at one contact-zone size, for timing against other codes.
 
-    femcontact hertz --contact-size H [--degree 1|2] [--ranks N] [--json]
+    femcontact hertz [--dim 2|3] --contact-size H [--degree 1|2] [--ranks N] [--json]
 
-prints the dofs, Newton iterations, simulated a (mm) and p0 (MPa), the wall time per phase
+--dim 2 (the default): a rigid cylinder on a plane-strain block (reference §5); --dim 3: a
+rigid sphere (R 50 mm, P 2000 N) on a block, its quarter meshed with symmetry planes.
+Prints the dofs, Newton iterations, simulated a (mm) and p0 (MPa), the wall time per phase
 (s, the whole process included) and, with --json, one JSON object whose `surface` lists
-[x (mm), p (MPa)] for every node of the loaded top edge (p = 0 outside contact). With
+[x (mm), p (MPa)] for every node of the loaded top edge (2-D), [r (mm), p (MPa)] with
+r = sqrt(x^2 + y^2) for every node of the loaded top face (3-D), p = 0 outside contact. With
 --ranks N > 1 the command starts itself under `mpirun -n N` (or the launcher in the
 environment variable FEMCONTACT_LAUNCHER, e.g. "srun -n {ranks}").
 """
@@ -35,6 +37,8 @@ START = time.perf_counter() - _process_age()
 
 
 def add_arguments(parser) -> None:
+    parser.add_argument("--dim", type=int, default=2, choices=(2, 3),
+                        help="2: cylinder on a plane-strain block; 3: sphere on a block (quarter model)")
     parser.add_argument("--contact-size", type=float, required=True,
                         help="element size in the contact zone h_c (mm); a/(k + 0.5) puts x = a mid-element")
     parser.add_argument("--degree", type=int, default=1, choices=(1, 2), help="Lagrange degree of the displacement")
@@ -55,23 +59,11 @@ def check(args) -> None:
 def relaunch(args) -> int:
     """Run this command again under mpirun with args.ranks ranks."""
     launcher = shlex.split(os.environ.get("FEMCONTACT_LAUNCHER", "mpirun -n {ranks}").format(ranks=args.ranks))
-    command = [sys.executable, "-m", "femcontact", "hertz", "--contact-size", repr(args.contact_size),
+    command = [sys.executable, "-m", "femcontact", "hertz", "--dim", str(args.dim),
+               "--contact-size", repr(args.contact_size),
                "--degree", str(args.degree), "--increments", str(args.increments), "--ranks", str(args.ranks)]
     return subprocess.call(launcher + command + (["--json"] if args.json else []),
                            env={**os.environ, "FEMCONTACT_HERTZ_CHILD": "1"})
-
-
-def surface(simulation) -> list:
-    """[x, p] of every node of the top edge, gathered on all ranks and sorted by x."""
-    import numpy as np
-
-    nodal = simulation.recorder.nodal_values()
-    comm = simulation.problem.mesh.comm
-    on = nodal["on_surface"]
-    x = np.concatenate(comm.allgather(nodal["coordinates"][on, 0]))
-    p = np.concatenate(comm.allgather(nodal["pressure"][on]))
-    order = np.argsort(x)
-    return [[float(x[i]), float(max(p[i], 0.0))] for i in order]
 
 
 def command(args) -> int:
@@ -86,22 +78,23 @@ def command(args) -> int:
     if comm.size != args.ranks:
         raise InputError(f"--ranks {args.ranks}: started on {comm.size} ranks")
     startup = time.perf_counter() - START
-    scene = hertz.scene(args.contact_size, increments=args.increments)
+    scene = (hertz.scene if args.dim == 2 else hertz.scene_3d)(args.contact_size, increments=args.increments)
     scene["mesh"]["degree"] = args.degree
     simulation = Simulation(scene, comm)
     simulation.run()
     start = time.perf_counter()
-    measured = hertz.measure(simulation)
-    nodes = surface(simulation)
+    r, p = hertz.surface_nodes(simulation)
+    measured = hertz.surface_metrics(r, p)
     post = time.perf_counter() - start
     a, p0 = hertz.reference(scene)
     timings = {"startup": startup, **simulation.timings, "postprocess": post, "total": time.perf_counter() - START}
-    result = {"contact_size": args.contact_size, "degree": args.degree, "ranks": comm.size, "dofs": simulation.dofs,
+    result = {"dim": args.dim, "contact_size": args.contact_size, "degree": args.degree, "ranks": comm.size,
+              "dofs": simulation.dofs,
               "newton_iterations": sum(row["newton_iterations"] for row in simulation.history),
               "newton_per_increment": [row["newton_iterations"] for row in simulation.history],
               "increments": len(simulation.history), "a": measured["a"], "p0": measured["p0"],
               "error_a": measured["a"] / a - 1, "error_p0": measured["p0"] / p0 - 1,
-              "timings": timings, "surface": nodes}
+              "timings": timings, "surface": [[float(ri), float(pi)] for ri, pi in zip(r, p)]}
     if comm.rank != 0:
         return 0
     if args.json:

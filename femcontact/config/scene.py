@@ -77,12 +77,15 @@ BLOCK = {
     "width": Field("float", 100.0, "block width in x (mm)", positive=True),
     "height": Field("float", 50.0, "block height in y (2-D) or z (3-D) (mm); top face at 0", positive=True),
     "depth": Field("float", 100.0, "block depth in y, 3-D only (mm)", positive=True),
+    "symmetry": Field("str", "none", "'quarter' (3-D): mesh the quarter x >= 0, y >= 0 of the block, with symmetry "
+                      "planes x = 0 and y = 0 (the indenter held to its axis; forces and reactions are the "
+                      "quarter's)", choices=("none", "quarter")),
 }
 
 INDENTER = {
-    "shape": Field("str", "cylinder", "rigid indenter: 'cylinder' (disc in 2-D) or 'flat' (a rigid plate)",
-                   choices=("cylinder", "flat")),
-    "radius": Field("float", 50.0, "cylinder radius (mm)", positive=True),
+    "shape": Field("str", "cylinder", "rigid indenter: 'cylinder' (disc in 2-D), 'sphere' (3-D) or 'flat' "
+                   "(a rigid plate)", choices=("cylinder", "sphere", "flat")),
+    "radius": Field("float", 50.0, "cylinder or sphere radius (mm)", positive=True),
     "width": Field("float", 20.0, "flat indenter width (mm)", positive=True),
 }
 
@@ -336,6 +339,8 @@ def _check_contact(scene: dict) -> None:
                                 f"({', '.join(RIGID_DOFS[dim])})")
         if step["amplitude"] == "pulse" and any(step["support_motion"].values()):
             problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
+    if scene["geometry"] == "block":
+        problems += _block_problems(scene)
     if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
         problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
                         "set geometry = 'peg_in_hole' and rigid = 'peg'")
@@ -367,6 +372,27 @@ def _check_contact(scene: dict) -> None:
             raise InputError(f"steps[{i}].load_point = {step['load_point']!r}: unknown point, expected one of "
                              + ", ".join(known))
     check_mesh(scene)  # an element-count estimate: a mesh too large or too coarse is refused before gmsh runs
+
+
+def _block_problems(scene: dict) -> list[str]:
+    """A sphere is a 3-D indenter; a quarter model is 3-D, its indenter held to the z axis and
+    loaded along it."""
+    problems = []
+    if scene["indenter"]["shape"] == "sphere" and scene["dim"] != 3:
+        problems.append("indenter.shape = 'sphere': a 3-D indenter (dim = 2; use 'cylinder')")
+    if scene["block"]["symmetry"] != "quarter":
+        return problems
+    if scene["dim"] != 3:
+        return problems + ["block.symmetry = 'quarter': a 3-D model (dim = 2)"]
+    for name in ("x", "y", "rx", "ry", "rz"):
+        if scene["rigid_body"]["dofs"][name] != "held":
+            problems.append(f"rigid_body.dofs.{name} = {scene['rigid_body']['dofs'][name]!r}: block.symmetry = "
+                            "'quarter' holds the indenter to the z axis, set it 'held'")
+    for i, step in enumerate(scene["steps"]):
+        if any(step["force"][:2]) or any(step["moment"]):
+            problems.append(f"steps[{i}]: block.symmetry = 'quarter' takes a force along z only "
+                            f"(force {step['force']}, moment {step['moment']})")
+    return problems
 
 
 PETSC_FAMILIES = ("ksp_", "pc_", "mat_", "mg_")  # mg_levels_* and mg_coarse_* tune multigrid levels

@@ -39,6 +39,9 @@ def mass_properties(rigid: dict, density: float, dim: int):
             return m, np.array([density * (xx + yy)])
         # 3-D blade: the section 1 mm thick about z = 0 (x and y axes through the tip centre)
         return m, np.array([density * yy + m / 12, density * xx + m / 12, density * (xx + yy)])
+    if shape == "sphere":
+        m = density * 4 / 3 * np.pi * rigid["radius"] ** 3
+        return m, np.full(3, 0.4 * m * rigid["radius"] ** 2)
     if shape == "cylinder":
         R, L = rigid["radius"], rigid["length"]
         m = density * np.pi * R * R * L

@@ -4,7 +4,7 @@ Every shape is written in its own frame, centred on its reference point (the cen
 for a peg, the centre for a disc), so the rigid body's pose only maps points into that
 frame. Shapes come from `geometry.model.Model.rigid`:
 rectangle (2-D peg, flat punch), cylinder (3-D peg), disc (2-D cylinder indenter),
-cylinder_y (3-D cylinder indenter, axis y), hole (a rigid hole, the peg deformable) and
+cylinder_y (3-D cylinder indenter, axis y), sphere (3-D sphere indenter), hole (a rigid hole, the peg deformable) and
 pin (snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred; in 3-D a blade,
 its section swept along z).
 """
@@ -55,7 +55,7 @@ def signed_distance(rigid: dict, xi):
         rho = ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
         return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny,
                     not rigid.get("tip_contact", True))
-    if shape == "disc":
+    if shape in ("disc", "sphere"):
         return ufl.sqrt(ufl.dot(xi, xi)) - rigid["radius"]
     if shape == "cylinder_y":
         return ufl.sqrt(xi[0] ** 2 + xi[2] ** 2) - rigid["radius"]

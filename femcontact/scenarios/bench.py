@@ -55,11 +55,12 @@ RUNNER_GOAL = 0.05
 worker, after the case that starts it)."""
 
 
-def _run(command: list) -> dict | None:
-    """Run one benchmark process; its JSON result with the outer wall time (s), or None."""
+def _run(command: list, env: dict | None = None) -> dict | None:
+    """Run one benchmark process (with `env` added to the environment); its JSON result with the
+    outer wall time (s), or None."""
     start = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True,
-                          env={**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
+                          env={**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", **(env or {})})
     wall = time.perf_counter() - start
     if done.returncode != 0:
         print(f"  failed ({done.returncode}): {' '.join(command)}\n{done.stderr[-2000:]}", file=sys.stderr)

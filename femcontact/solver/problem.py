@@ -137,19 +137,27 @@ class Problem:
         return shape
 
     def _supports(self) -> list:
-        self.support_dofs = {}
+        """Clamped supports (support_dofs: name -> nodes) and symmetry planes, each holding one
+        displacement component (symmetry_dofs: name -> unrolled dofs)."""
+        self.support_dofs, self.symmetry_dofs = {}, {}
         bcs = []
         for name in self.model.supports:
             facets = self.model.facet_tags.find(self.model.facets[name])
             dofs = fem.locate_dofs_topological(self.V, self.dim - 1, facets)
             self.support_dofs[name] = dofs
             bcs.append(fem.dirichletbc(np.zeros(self.dim, dtype=np.float64), dofs, self.V))
+        for name, component in self.model.symmetry.items():
+            facets = self.model.facet_tags.find(self.model.facets[name])
+            dofs = fem.locate_dofs_topological(self.V.sub(component), self.dim - 1, facets)
+            self.symmetry_dofs[name] = dofs
+            bcs.append(fem.dirichletbc(0.0, dofs, self.V.sub(component)))
         return bcs
 
     @property
     def support_dof_set(self) -> set:
-        """Local (unrolled) indices of all supported dofs."""
-        return {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
+        """Local (unrolled) indices of all held dofs: supports and symmetry planes."""
+        held = {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
+        return held.union(int(dof) for dofs in self.symmetry_dofs.values() for dof in dofs)
 
     @functools.cached_property
     def extent(self) -> float:
