@@ -2,7 +2,7 @@
 
     femcontact hertz [--dim 2|3] --contact-size H [--degree 1|2] [--ranks N] [--json]
 
---dim 2 (the default): a rigid cylinder on a plane-strain block (reference §5); --dim 3: a
+--dim 2 (the default): a rigid cylinder on a plane-strain block (docs/references.md); --dim 3: a
 rigid sphere (R 50 mm, P 2000 N) on a block, its quarter meshed with symmetry planes.
 Prints the dofs, Newton iterations, simulated a (mm) and p0 (MPa), the wall time per phase
 (s, the whole process included) and, with --json, one JSON object whose `surface` lists

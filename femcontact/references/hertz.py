@@ -1,6 +1,6 @@
 """Hertz contact: the analytic half-space solutions and the benchmarks' data.
 
-Line contact (reference §5): a rigid cylinder of radius R pressed with P (N per mm of
+Line contact (docs/references.md): a rigid cylinder of radius R pressed with P (N per mm of
 thickness) into a plane-strain elastic block: E* = E / (1 - nu^2), a = sqrt(4 P R / (pi E*)),
 p0 = 2 P / (pi a). Point contact: a rigid sphere of radius R pressed with P (N) into an
 elastic half-space: a = (3 P R / (4 E*))^(1/3), p0 = 3 P / (2 pi a^2), p(r) = p0 sqrt(1 - r^2/a^2).

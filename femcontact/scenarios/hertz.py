@@ -1,6 +1,6 @@
 """The Hertz benchmarks: their scenes, their measurement protocol and one run.
 
-2-D (reference §5): a rigid cylinder on a plane-strain block. 3-D: a rigid sphere on a
+2-D (docs/references.md): a rigid cylinder on a plane-strain block. 3-D: a rigid sphere on a
 block, its quarter x, y >= 0 meshed with symmetry planes, the contact zone r <= 1.5 a
 meshed at the uniform size h_c and graded outside. The simulated p0 is the largest nodal
 contact pressure; a comes from fitting p^2 linear in r^2 over the outer part of the
