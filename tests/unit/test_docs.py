@@ -36,6 +36,7 @@ HISTORY = re.compile("|".join([
     r"\bclone (of|at)\s+" + HEX,
     r"\b(working )?tree of\s+" + HEX,
     r"\bat (?=[0-9a-f]*[a-f])" + HEX,                          # "at 1c483a5" (a hash, not a number)
+    r"\breference \u00a7\s*\d",                                  # a source the user does not have: name it
 ]), re.IGNORECASE)
 
 
@@ -73,7 +74,7 @@ def test_the_patterns_catch_history_and_spare_physics():
                "other helpers' jobs", "this branch merged with main's update", "before the last merge",
                "reported to the lead", "from a clean clone of 1225964", "(commit e18e21b)", "at 1c483a5",
                "before this change", "the working tree of b53d2e2",
-               "the issue's Moreau-Jean option", "0.63 of the thesis' (issue)"]
+               "the issue's Moreau-Jean option", "0.63 of the thesis' (issue)", "(reference \u00a75)"]
     physics = ["the one-point branch closes", "a quiet gmsh session", "no helper daemon",
                "cases before duplicates are merged", "color: #222;", "at 1000000 N", "the chamfer branch",
                "the leading dim x dim block", "GetFEM merges regions", "in its own session"]
