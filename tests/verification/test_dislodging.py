@@ -302,3 +302,39 @@ def test_a_pull_that_holds_the_rotation_needs_the_held_pullout(wedged_peg):
     assert not below["dislodged"] and abs(below["rise_at_end_mm"]) < 1e-3
     assert above["dislodged"] and above["event"] == "risen" and above["rotation"] == "held"
     assert wedged_peg.simulation.problem.rigid.modes[2] == "free"  # the hold is undone after the pull
+
+
+def test_a_case_with_fields_films_its_weakest_dislodging_pull(tmp_path):
+    """`outputs.fields = true`: after its pulls the case runs the weakest one that dislodged once
+    more from the wedged state and writes it as a ParaView time series (one frame per increment
+    with outputs.every = 1, and the event): the frames start in the pull step, the peg rises from
+    frame to frame, and the last frame is the event of that pull in pulls.csv (the re-run is the
+    same pull: the listeners only observe)."""
+    import meshio
+
+    from femcontact.config.scene import load_scene
+    from femcontact.scenarios.dislodging import run_case
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
+                       ["mesh.resolution=0.5", "dislodging.tolerance=0.05", "dislodging.search=false",
+                        "dislodging.forces=[4.0, 9.0, 7.0]", "outputs.fields=true"])
+    result = run_case(scene, tmp_path)
+    assert result["metrics"]["filmed_force_N"] == 7.0  # 4 N holds (pull-out ~5.6 N), 7 N is the weakest out
+    with open(tmp_path / "pulls.csv") as stream:
+        pull = next(row for row in csv.DictReader(stream) if float(row["force_N"]) == 7.0)
+    assert pull["dislodged"] == "True"
+    frames = {}
+    for name in ("fields.xdmf", "rigid.xdmf"):
+        with meshio.xdmf.TimeSeriesReader(tmp_path / name) as reader:
+            reader.read_points_cells()
+            frames[name] = [reader.read_data(k) for k in range(reader.num_steps)]
+    times = np.array([frame[0] for frame in frames["fields.xdmf"]])
+    assert len(times) == int(pull["increments"]) + 1 > 1
+    assert np.all(np.diff(times) > 0) and times[0] > 0.2  # the pull step starts at 0.2 s
+    assert times[-1] == pytest.approx(0.2 + float(pull["dislodge_time_s"]), abs=1e-12)
+    rise = np.array([frame[1]["displacement"][:, 1].mean() for frame in frames["rigid.xdmf"]])
+    assert np.all(np.diff(rise) > 0)
+    assert rise[-1] - rise[0] == pytest.approx(float(pull["rise_at_end_mm"]), rel=0.2)
+    assert {"displacement", "contact_pressure", "contact_status"} <= set(frames["fields.xdmf"][0][1])
+    with open(tmp_path / "history.csv") as stream:
+        assert len(list(csv.DictReader(stream))) == len(times)
