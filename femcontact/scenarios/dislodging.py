@@ -202,7 +202,8 @@ class Puller:
         try:
             row = self.pull(force, method, frequency)
         finally:
-            sim.listeners.clear()
+            for listener in (history, series):
+                sim.listeners.remove(listener)
             sim.recorder.observers.remove(series.capture)
             history.close()
         error = sim.problem.mesh.comm.bcast(history.error or series.error, root=0)
