@@ -20,6 +20,10 @@ exact integral of the applied force from the start of the pull to the event;
 `impulse_frames_Ns` the thesis' frame-quantised one, to the first output frame
 (`frame` = 0.005 s) at or after the event.
 
+With `outputs.fields = true` a case also films one pull, run once more from the wedged state
+after the others: the weakest that dislodged the peg (else the strongest), as history.csv and the
+ParaView time series fields.xdmf and rigid.xdmf (`femcontact animate CASE_DIR` plays it).
+
 Each case writes pulls.csv (one row per pull) in its directory; `report` gathers them
 into results/NAME/results.csv and thresholds.csv and draws the plots.
 """
@@ -183,6 +187,30 @@ class Puller:
                        impulse_frames_Ns=pull_impulse(sim.schedule, frame_time(elapsed, s["frame"])))
         return row
 
+    def film(self, force: float, method: str, frequency: float, case_dir: Path) -> dict:
+        """The pull `force` once more from the wedged state, its increments streamed to
+        case_dir/history.csv and, every `outputs.every`-th and at the event, to the ParaView time
+        series fields.xdmf and rigid.xdmf (`FieldSeries`, at the scene's times); its results row."""
+        from femcontact.outputs.fields import FieldSeries
+        from femcontact.outputs.history import HistoryWriter
+
+        sim = self.simulation
+        sim.resume(self.wedged)  # the series starts from the wedged state (slip is measured from it)
+        history = HistoryWriter(Path(case_dir) / "history.csv", sim.problem.mesh.comm.rank)
+        series = FieldSeries(sim, case_dir)
+        sim.listeners += [history, series]
+        try:
+            row = self.pull(force, method, frequency)
+        finally:
+            for listener in (history, series):
+                sim.listeners.remove(listener)
+            sim.recorder.observers.remove(series.capture)
+            history.close()
+        error = sim.problem.mesh.comm.bcast(history.error or series.error, root=0)
+        if error is not None:
+            raise error
+        return row
+
     def threshold(self, method: str, frequency: float, rows: list) -> dict:
         """Bisection for the smallest peak force that dislodges (every pull appended to rows)."""
         s = self.settings
@@ -333,6 +361,11 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
             writer = csv.DictWriter(stream, fieldnames=pull_columns(), extrasaction="ignore")
             writer.writeheader()
             writer.writerows(rows)
+    if scene["outputs"]["fields"] and rows:  # the film: the weakest pull that dislodged, else the strongest
+        dislodged = [row for row in rows if row["dislodged"]]
+        filmed = min(dislodged, key=lambda r: r["force_N"]) if dislodged else max(rows, key=lambda r: r["force_N"])
+        puller.film(filmed["force_N"], method, frequency, case_dir)
+        metrics["filmed_force_N"] = filmed["force_N"]
     write_snapshot_fields(puller, case_dir)
     walls = [row["wall_s"] for row in rows]
     metrics.update(pulls=len(rows), pull_wall_mean_s=float(np.mean(walls)) if walls else 0.0,

@@ -22,6 +22,10 @@ load (`step_impulse`), not the scheme's sums. Why this scheme:
   F/k ~ 1e-4 mm, is below anything the study measures);
 - a free body is linear: one Newton step (no trust-region cap, M/dt^2 regularises S).
 
+Output: with listeners (history file, ParaView time series), each accepted increment's row goes
+to them as in `Simulation.run_step`, and the state at the event closes the output; without, no row
+is computed.
+
 Events: `integrate` stops at the first event (the peg risen by a distance, or all
 contact zones open), located inside the increment by re-solving the increment with a
 shorter dt (secant on the rise; bisection for the opening) and never integrates after it.
@@ -306,7 +310,11 @@ class DynamicSimulation(Simulation):
                     outcome.before_event = committed
                     t_event = self._locate(hit, event, index, t, dt, committed, y0, previous, rise, outcome)
                     outcome.event, outcome.time = hit, float(self.schedule.start_times[index] + t_event)
+                    if self.listeners:  # the state at the event closes the output
+                        self._record(self.recorder.row(self.schedule.load(index, t_event, t_event - t), 0))
                     return outcome
+                if self.listeners:  # an output row costs an assembly: only when someone listens
+                    self._record(self.recorder.row(load, iterations))
                 self.accept(load)
                 t = end
                 outcome.increments += 1

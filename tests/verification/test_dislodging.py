@@ -1,6 +1,7 @@
 """Dynamics through contact changes (femcontact.scenarios.dynamics) against exact solutions, and the
 dislodging scenario's bookkeeping against the thesis' numbers (ch. 4)."""
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -302,3 +303,44 @@ def test_a_pull_that_holds_the_rotation_needs_the_held_pullout(wedged_peg):
     assert not below["dislodged"] and abs(below["rise_at_end_mm"]) < 1e-3
     assert above["dislodged"] and above["event"] == "risen" and above["rotation"] == "held"
     assert wedged_peg.simulation.problem.rigid.modes[2] == "free"  # the hold is undone after the pull
+
+
+
+def test_a_filmed_case_writes_its_weakest_dislodging_pull_and_the_report_plays_it(tmp_path):
+    """A study case that [animation] selects runs with `outputs.fields = true`: after its pulls it
+    runs the weakest one that dislodged once more from the wedged state and writes it as a ParaView
+    time series (one frame per increment with every = 1, and the event): the frames start in the
+    pull step, the peg rises from frame to frame, and the last frame is the event of that pull in
+    pulls.csv (the re-run is the same pull: the listeners only observe). The report plays the film."""
+    import meshio
+
+    from femcontact.cli import main
+    from femcontact.study.runner import load_study
+
+    study = tmp_path / "film.toml"
+    study.write_text(f'[study]\nname = "film"\nscene = "{Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml"}"\n'
+                     '[scene]\n"mesh.resolution" = 0.5\n"dislodging.tolerance" = 0.05\n"dislodging.search" = false\n'
+                     '[sweep]\ncases = [ { "dislodging.forces" = [4.0, 9.0, 7.0] } ]\n'
+                     '[animation]\nselect = [ { "dislodging.case" = 1 } ]\n')
+    assert main(["study", str(study), "--results", str(tmp_path), "--quiet"]) == 0
+    case = load_study(study, results_root=tmp_path).cases[0]
+    assert json.loads((case.dir / "result.json").read_text())["metrics"]["filmed_force_N"] == 7.0  # 4 N holds
+    with open(case.dir / "pulls.csv") as stream:
+        pull = next(row for row in csv.DictReader(stream) if float(row["force_N"]) == 7.0)
+    assert pull["dislodged"] == "True"
+    frames = {}
+    for name in ("fields.xdmf", "rigid.xdmf"):
+        with meshio.xdmf.TimeSeriesReader(case.dir / name) as reader:
+            reader.read_points_cells()
+            frames[name] = [reader.read_data(k) for k in range(reader.num_steps)]
+    times = np.array([frame[0] for frame in frames["fields.xdmf"]])
+    assert len(times) == int(pull["increments"]) + 1 > 1
+    assert np.all(np.diff(times) > 0) and times[0] > 0.2  # the pull step starts at 0.2 s
+    assert times[-1] == pytest.approx(0.2 + float(pull["dislodge_time_s"]), abs=1e-12)
+    rise = np.array([frame[1]["displacement"][:, 1].mean() for frame in frames["rigid.xdmf"]])
+    assert np.all(np.diff(rise) > 0)
+    assert {"displacement", "contact_pressure", "contact_status"} <= set(frames["fields.xdmf"][0][1])
+    with open(case.dir / "history.csv") as stream:
+        assert len(list(csv.DictReader(stream))) == len(times)
+    assert main(["report", str(study), "--results", str(tmp_path)]) == 0
+    assert f'<video src="animations/{case.id}.mp4"' in (tmp_path / "film" / "index.html").read_text()
