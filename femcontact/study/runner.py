@@ -342,6 +342,8 @@ def attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
             continue
         scene = {**case.scene, "steps": case.scene["steps"][:shared]}
         scene.pop("dislodging", None)  # read only after the shared steps
+        if "outputs" in scene:  # a filmed case shares its prefix with the others: the prefix writes no time series
+            scene["outputs"] = {**scene["outputs"], "fields": False, "every": 1}
         identity = case_id(scene)
         if identity not in prefixes:
             prefixes[identity] = Case({}, scene, identity, results / "prefix" / identity)

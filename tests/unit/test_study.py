@@ -241,6 +241,18 @@ def test_shared_prefix_runs_once_and_variants_restart_from_it(tmp_path, fake):
     assert len(calls) == 3 and all(f"--restart {prefix_dirs[0].resolve()}/checkpoint" in a for a in calls.values())
 
 
+
+def test_a_filmed_case_shares_the_prefix_of_the_others(tmp_path):
+    """Output settings (a time series for the report's film) do not change the shared steps' physics."""
+    from femcontact.study.runner import load_study
+
+    path = make_study(tmp_path, '[sweep]\ngrid = { "steps.1.force" = [[1.0, 0.0], [2.0, 0.0]] }\n'
+                      '[animation]\nselect = [ { "steps.1.force" = [2.0, 0.0] } ]', settings="shared_steps = 1")
+    study = load_study(path, results_root=tmp_path / "results")
+    filmed = [case for case in study.cases if case.scene["outputs"]["fields"]]
+    assert len(filmed) == 1 and len({case.prefix.id for case in study.cases}) == 1
+
+
 # -- report ---------------------------------------------------------------------------------------
 
 class Page(HTMLParser):
