@@ -65,15 +65,20 @@ test-mpi: setup
 # the cluster stopped and removed on any exit.
 SLURM_APT_PACKAGES := slurm-wlm munge
 
-$(STAMPS)/apt-slurm: Makefile
+# $(call install_missing,PACKAGES,WHAT): apt-get install PACKAGES unless all are installed, then stamp.
+define install_missing
 	@mkdir -p $(STAMPS)
-	@if [ "$$(dpkg-query -W -f='$${Status}\n' $(SLURM_APT_PACKAGES) 2>/dev/null | grep -c 'install ok installed')" \
-	    -lt "$(words $(SLURM_APT_PACKAGES))" ]; then \
-	  echo "== installing SLURM and munge (Debian packages)"; \
+	@if [ "$$(dpkg-query -W -f='$${Status}\n' $(1) 2>/dev/null | grep -c 'install ok installed')" \
+	    -lt "$(words $(1))" ]; then \
+	  echo "== installing $(2) (Debian packages)"; \
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q; \
-	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(SLURM_APT_PACKAGES); \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(1); \
 	fi
 	@touch $@
+endef
+
+$(STAMPS)/apt-slurm: Makefile
+	$(call install_missing,$(SLURM_APT_PACKAGES),SLURM and munge)
 
 test-slurm: setup $(STAMPS)/apt-slurm
 	@cluster=$$(mktemp -d /tmp/femcontact-slurm.XXXXXX); \
@@ -89,14 +94,7 @@ test-slurm: setup $(STAMPS)/apt-slurm
 PARAVIEW_APT_PACKAGES := paraview python3-paraview xvfb xauth
 
 $(STAMPS)/apt-paraview: Makefile
-	@mkdir -p $(STAMPS)
-	@if [ "$$(dpkg-query -W -f='$${Status}\n' $(PARAVIEW_APT_PACKAGES) 2>/dev/null | grep -c 'install ok installed')" \
-	    -lt "$(words $(PARAVIEW_APT_PACKAGES))" ]; then \
-	  echo "== installing ParaView (Debian packages)"; \
-	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q; \
-	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(PARAVIEW_APT_PACKAGES); \
-	fi
-	@touch $@
+	$(call install_missing,$(PARAVIEW_APT_PACKAGES),ParaView)
 
 PARAVIEW_CASES := wedging_2d wedging_3d
 

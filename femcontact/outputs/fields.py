@@ -173,14 +173,9 @@ class FieldSeries:
 
     def _contact_values(self) -> dict:
         """This rank's owned nodes: lumped contact values, the local position xi and normal."""
-        from dolfinx.fem import petsc
-        from petsc4py import PETSc
+        from femcontact.outputs.recorder import assemble_nodal
 
-        vec = self.nodal.vector
-        with vec.localForm() as local:
-            local.set(0.0)
-        petsc.assemble_vector(vec, self.nodal_form)
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        assemble_nodal(self.nodal, self.nodal_form)
         k, dim = self.Q.dofmap.index_map_bs, self.dim
         values = self.nodal.x.array[: self.n_owned * k].reshape(-1, k)
         area = values[:, -1:]

@@ -77,14 +77,7 @@ class Recorder:
 
     def nodal_values(self) -> dict:
         """Lumped nodal contact values on this rank's owned P1 nodes (pressure in MPa)."""
-        from dolfinx.fem import petsc
-        from petsc4py import PETSc
-
-        vec = self.nodal.vector
-        with vec.localForm() as local:
-            local.set(0.0)
-        petsc.assemble_vector(vec, self.nodal_form)
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        assemble_nodal(self.nodal, self.nodal_form)
         n, k = self.Q.dofmap.index_map.size_local, len(self.nodal_names)
         values = self.nodal.x.array[: n * k].reshape(-1, k)
         area = values[:, -1]
@@ -149,6 +142,18 @@ class Recorder:
         for observe in self.observers:
             observe()
         return row
+
+
+def assemble_nodal(function, form) -> None:
+    """Assemble the vector `form` into `function`, each node's sum over every rank (its ghosts too)."""
+    from dolfinx.fem import petsc
+    from petsc4py import PETSc
+
+    vec = function.vector
+    with vec.localForm() as local:
+        local.set(0.0)
+    petsc.assemble_vector(vec, form)
+    vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
 
 
 def check_stop_columns(scene: dict, columns: list[str]) -> None:
