@@ -111,7 +111,7 @@ class SchurNewton:
         contact = self.b_contact.array_r
         G = np.array([self._allsum(float(mode @ contact)) for mode in self._modes()])
         Q_ext = load.generalized_force(p.rigid.values)
-        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization @ (p.rigid.values - self.tie_pose)
+        R_r = -(Q_ext + G) + p.rigid_residual(load) + self.stabilization_load()
         R_u = self.b_bulk.copy()
         R_u.axpy(1.0, self.b_contact)
         petsc.set_bc(R_u, p.bcs, scale=0.0)
@@ -156,12 +156,16 @@ class SchurNewton:
         self.stabilization = factor * np.diag(k * scale)
         self.tie_pose = p.rigid.r_old.value.copy() if tie_pose is None else np.array(tie_pose, dtype=float)
 
+    def stabilization_load(self) -> np.ndarray:
+        """The stabilisation spring's generalised force on the rigid body at the current pose
+        (N, N*mm; zero when it is off)."""
+        return self.stabilization @ (self.problem.rigid.values - self.tie_pose)
+
     def stabilization_force(self) -> float:
         """The stabilisation spring's load on the rigid body at the current pose: |force| plus
         |moment| over the body size (N)."""
-        p = self.problem
-        force = self.stabilization @ (p.rigid.values - self.tie_pose)
-        return float(np.linalg.norm(force[: p.dim]) + np.linalg.norm(force[p.dim:]) / p.shape["scale"])
+        p, load = self.problem, self.stabilization_load()
+        return float(np.linalg.norm(load[: p.dim]) + np.linalg.norm(load[p.dim:]) / p.shape["scale"])
 
     def solve(self, load) -> int:
         """Solve one increment; returns the Newton iterations taken."""

@@ -232,8 +232,7 @@ class Simulation:
                     p.restore(accepted)
                     break
                 accepted = p.state()
-                force = self.newton.stabilization @ (p.rigid.values - p.rigid.r_old.value)
-                self.stabilization_force = float(np.linalg.norm(force[: p.dim]))
+                self.stabilization_force = float(np.linalg.norm(self.newton.stabilization_load()[: p.dim]))
         finally:
             self.newton.stabilize(0.0)
         return iterations
