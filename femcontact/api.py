@@ -14,7 +14,6 @@
 `InputError` naming the bad key. Tables (`Result.history`, `Study.results()`) are pandas
 DataFrames when pandas is installed, else dicts of numpy arrays (one per column).
 """
-import csv
 import json
 import math
 import shutil
@@ -71,8 +70,9 @@ class Result:
         path = self.case_dir / "history.csv"
         if not path.exists():
             return table([])
-        with open(path, newline="") as stream:
-            return table(list(csv.DictReader(stream)))
+        from femcontact.outputs.history import read_history
+
+        return _frame(read_history(path))
 
     @property
     def fields(self) -> dict:
@@ -84,34 +84,19 @@ class Result:
 
 
 def table(rows: list[dict]):
-    """Rows of strings (a CSV file's) as columns: numbers where every filled cell is one."""
-    columns = {}
-    for row in rows:
-        for key in row:
-            columns.setdefault(key, [])
-    for key in columns:
-        columns[key] = _column([row.get(key) for row in rows])
+    """Rows of strings (a CSV file's) as a table: numbers where every filled cell is one."""
+    from femcontact.outputs.history import columns
+
+    return _frame(columns(rows))
+
+
+def _frame(columns: dict):
+    """{column: array} as a pandas DataFrame when pandas is installed, else as it is."""
     try:
         import pandas
     except ImportError:
         return columns
     return pandas.DataFrame(columns)
-
-
-def _column(cells: list):
-    import numpy as np
-
-    def number(cell):
-        if cell is None or cell == "":
-            return math.nan
-        if cell in ("True", "False"):
-            return float(cell == "True")
-        return float(cell)
-
-    try:
-        return np.array([number(cell) for cell in cells], dtype=float)
-    except (TypeError, ValueError):
-        return np.array(["" if cell is None else str(cell) for cell in cells], dtype=object)
 
 
 def run(scene, out=None, quiet: bool = False, checkpoint: bool = False, restart=None) -> Result:

@@ -9,7 +9,6 @@ from 0 to the 99th percentile of von Mises over all frames' cells (a sharp corne
 peak would otherwise leave the rest in the lowest colour); higher values take the top colour.
 2-D pictures are drawn by matplotlib, 3-D ones rendered off-screen by pyvista.
 """
-import csv
 import os
 import shutil
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.errors import InputError
+from femcontact.outputs.history import read_history
 
 PERCENTILE = 99.0
 CMAP = "jet"
@@ -51,20 +51,6 @@ def read_series(path: Path) -> tuple:
     return points, cells[0].data, frames
 
 
-def read_history(path: Path) -> dict:
-    """history.csv as {column: numpy array}; cells that are not numbers are NaN."""
-    with open(path, newline="") as stream:
-        rows = list(csv.DictReader(stream))
-
-    def number(text):
-        try:
-            return float(text)
-        except (TypeError, ValueError):
-            return np.nan
-
-    return {name: np.array([number(row[name]) for row in rows]) for name in (rows[0] if rows else {})}
-
-
 def force_columns(history: dict) -> list[str]:
     """The forces worth watching: each contact zone's resultant, else each support's reaction;
     and the applied force components that are not zero throughout."""
@@ -88,9 +74,10 @@ def animate(case_dir, scale: float = 1.0, fps: float = 10.0, forces=None) -> lis
     rigid = read_series(case_dir / "rigid.xdmf") if (case_dir / "rigid.xdmf").exists() else None
     history = read_history(case_dir / "history.csv")
     forces = forces or force_columns(history)
-    unknown = [name for name in forces if name not in history]
+    numeric = [name for name, values in history.items() if values.dtype != object]
+    unknown = [name for name in forces if name not in numeric]
     if unknown:
-        raise InputError(f"--force {unknown[0]}: not a column of history.csv (columns: {', '.join(history)})")
+        raise InputError(f"--force {unknown[0]}: not a column of history.csv (numeric columns: {', '.join(numeric)})")
     stress = np.concatenate([frame[2]["von_mises"].ravel() for frame in frames])
     limits = (0.0, max(float(np.percentile(stress, PERCENTILE)), 1e-12))
     draw = _Plane(points, cells, rigid) if np.allclose(points[:, 2], 0) else _Solid(points, cells, rigid)

@@ -1,7 +1,9 @@
 """`history.csv`, streamed: one row per converged increment, handed to the kernel at once, so
-a run that is killed or fails keeps every increment it finished (written on rank 0)."""
+a run that is killed or fails keeps every increment it finished (written on rank 0); and read
+back as columns (`read_history`)."""
 import csv
 import io
+import math
 import os
 from pathlib import Path
 
@@ -50,3 +52,34 @@ class HistoryWriter:
         if self.fd is not None:
             os.close(self.fd)
             self.fd = None
+
+
+def read_history(path) -> dict:
+    """A history.csv (or any CSV of rows) as {column: numpy array} (see `columns`)."""
+    with open(path, newline="") as stream:
+        return columns(list(csv.DictReader(stream)))
+
+
+def columns(rows: list[dict]) -> dict:
+    """Rows of strings (a CSV file's) as {column: numpy array}: floats where every filled cell is a
+    number (True/False as 1/0, empty cells NaN), else the texts."""
+    names = {}
+    for row in rows:
+        names.update(dict.fromkeys(row))
+    return {name: _column([row.get(name) for row in rows]) for name in names}
+
+
+def _column(cells: list):
+    import numpy as np
+
+    def number(cell):
+        if cell is None or cell == "":
+            return math.nan
+        if cell in ("True", "False"):
+            return float(cell == "True")
+        return float(cell)
+
+    try:
+        return np.array([number(cell) for cell in cells], dtype=float)
+    except (TypeError, ValueError):
+        return np.array(["" if cell is None else str(cell) for cell in cells], dtype=object)
