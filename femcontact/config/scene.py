@@ -30,6 +30,11 @@ def deformable_body(scene: dict) -> str:
     return {"peg": "hole", "hole": "peg", "indenter": "block"}[scene["rigid"]]
 
 
+def friction_coefficient(scene: dict) -> float:
+    """The Coulomb coefficient the scene simulates: `contact.mu` where it names `friction`, else 0."""
+    return scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+
+
 def _material(E=193000.0, nu=0.27, density=8.05e-9, yield_stress=210.0) -> dict:
     """Defaults: stainless steel 316 as in the reference's wedging simulation."""
     return {

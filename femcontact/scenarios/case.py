@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from femcontact.errors import InputError
+from femcontact.config.scene import friction_coefficient
 
 
 def family_metrics(simulation) -> dict:
@@ -77,7 +78,7 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
     if not size > 0 or (earlier and max(earlier[-1]["contact_A_force"], earlier[-1]["contact_B_force"])
                         > PRELOAD_FLOOR * size):
         return None
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     needed = two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
                                                pose.points[step["load_point"]], couple)
     if not needed > mu:

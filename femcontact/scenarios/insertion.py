@@ -38,6 +38,7 @@ import math
 import numpy as np
 
 from geometry.placement import chamfer_height
+from femcontact.config.scene import friction_coefficient
 
 CONTACT_FLOOR = 1e-4
 JAM_SLOPE = 5.0
@@ -173,7 +174,7 @@ def insertion_metrics(simulation) -> dict:
     out["jam_depth"] = jam_depth(scene, curve)
     out["stopped"] = bool(simulation.stopped)
     out["jammed"] = out["jam_depth"] is not None or out["stopped"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     out["wedged"] = any(ph == "two_point" and inside_cones(scene, row, mu) for row, ph in zip(history, curve["phase"]))
     out["final_depth"] = float(depth[-1])
     for phase in PHASES:
@@ -209,7 +210,7 @@ def analytic_problem(scene: dict):
     if np.count_nonzero(K_plane - np.diag(np.diag(K_plane))) or scene["hole"]["chamfer_width"] <= 0:
         return None
     peg, hole = scene["peg"], scene["hole"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     rho, theta0 = peg["corner_radius"], math.radians(peg["tilt"])
     problem = whitney.Insertion(peg["width"], hole["width"], mu, K_plane[0, 0], K_plane[2, 2],
                                 scene["support"]["compliance_centre"] - rho, peg["offset"] - rho * math.sin(theta0),

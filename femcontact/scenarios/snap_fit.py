@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.references import snap_fit as reference
+from femcontact.config.scene import friction_coefficient
 
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
@@ -90,7 +91,7 @@ def snap_fit_metrics(simulation) -> dict:
     from geometry.snap_fit import layout, nose_profile
 
     scene, history = simulation.scene, simulation.history
-    spring, mu = scene["spring"], scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    spring, mu = scene["spring"], friction_coefficient(scene)
     nose, place = nose_profile(scene["peg"]), layout(scene)
     insert = forces(scene, [row for row in history if row["step"] == "insert"])
     withdraw = forces(scene, [row for row in history if row["step"] == "withdraw"])
@@ -230,7 +231,7 @@ def reduced_model(scene: dict) -> dict:
     from geometry.snap_fit import layout, nose_profile
 
     spring, material = scene["spring"], scene["materials"]["spring"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     nose, place = nose_profile(scene["peg"]), layout(scene)
     k = reference.cantilever_stiffness(material["E"], spring["thickness"], spring["length"], spring["width"])
     couple = reference.coupling(spring)

@@ -25,13 +25,14 @@ import sys
 import numpy as np
 
 from femcontact.references import snap_fit as reference
+from femcontact.config.scene import friction_coefficient
 
 MAX_ANGLE_DEG = 60.0
 
 
 def _model(scene: dict):
     spring, material = scene["spring"], scene["materials"]["spring"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     k = reference.cantilever_stiffness(material["E"], spring["thickness"], spring["length"], spring["width"])
     return k, mu, reference.coupling(spring)
 

@@ -46,6 +46,7 @@ import numpy as np
 from femcontact.references import peg_in_hole as analytic
 from femcontact.scenarios.stability import friction_needed
 from geometry.placement import peg_pose
+from femcontact.config.scene import friction_coefficient
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
 STABILIZATION_TOL = 1e-3  # stabilisation force after release / residual force
@@ -87,7 +88,7 @@ def _loaded(row: dict, dim: int) -> bool:
 def analytic_metrics(scene: dict) -> dict:
     """The geometric wedging condition of the scene (2-D formulas, also used in 3-D in the x-z plane)."""
     d, D, l_d = scene["peg"]["width"], scene["hole"]["width"], scene["peg"]["insertion_depth"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     crit, top = analytic.l_crit(d, D), analytic.l_max(d, mu)
     out = {"clearance_ratio": analytic.clearance_ratio(d, D), "l_crit": crit, "l_max": top,
            "depth_over_l_crit": l_d / crit, "depth_over_l_max": l_d / top if top > 0 else math.inf,

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from femcontact.config.scene import friction_coefficient
+
 
 def _figure():
     import matplotlib
@@ -41,7 +43,7 @@ def model_curve(scene: dict, depth, withdrawal: bool = False) -> np.ndarray:
     from geometry.snap_fit import layout, nose_profile
 
     spring, material = scene["spring"], scene["materials"]["spring"]
-    mu = scene["contact"]["mu"] if "friction" in scene["effects"] else 0.0
+    mu = friction_coefficient(scene)
     k = reference.cantilever_stiffness(material["E"], spring["thickness"], spring["length"], spring["width"])
     _, axial = reference.rigid_arm_forces(nose_profile(scene["peg"]), layout(scene).apex[0], k, mu,
                                           reference.coupling(spring), np.asarray(depth), withdrawal)
