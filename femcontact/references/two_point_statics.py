@@ -54,6 +54,20 @@ def friction_needed(contacts, force, at, couple: float) -> float:
     return high
 
 
+def placement_friction_needed(scene: dict, force, couple: float, load_point: str) -> float | None:
+    """The least mu with which a rigid peg at the scene's two-point placement holds `force` (N) at
+    its named point `load_point` and `couple` (N*mm); None where this model does not apply (not
+    2-D, no two-point placement, a load point the placement does not name)."""
+    from geometry.placement import peg_pose
+
+    if scene.get("dim") != 2 or scene.get("peg", {}).get("placement") != "two_point":
+        return None
+    pose = peg_pose(scene)
+    if load_point not in pose.points:
+        return None
+    return friction_needed(peg_in_hole_contacts(pose), force, pose.points[load_point], couple)
+
+
 def peg_in_hole_contacts(pose) -> list:
     """Contacts A and B of a peg placed in two-point contact (a geometry.placement.Pose, 2-D)."""
     side_normal = pose.rotation @ np.array([1.0, 0.0])  # the peg's side at A, into the peg

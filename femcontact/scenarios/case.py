@@ -60,18 +60,14 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
     hole (no compliant support), with no preload left by earlier steps: then a load that needs
     more friction than mu (`references.two_point_statics`) has no equilibrium (the peg slides or
     turns out of the contacts)."""
-    from femcontact.references import two_point_statics
     from femcontact.references.peg_in_hole import l_2p
-    from geometry.placement import peg_pose
+    from femcontact.references.two_point_statics import placement_friction_needed
 
     scene = simulation.scene
     if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
             or scene["peg"]["placement"] != "two_point" or "compliant_support" in scene["effects"]):
         return None
     step = scene["steps"][index]
-    pose = peg_pose(scene)
-    if step["load_point"] not in pose.points:
-        return None
     force, couple = [float(f) for f in load.force], float(load.moment[0])
     size = math.hypot(*force) + abs(couple) / l_2p(scene["peg"]["width"], scene["peg"]["insertion_depth"])
     earlier = [row for row in simulation.history if row["step"] != step["name"]]
@@ -79,9 +75,8 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
                         > PRELOAD_FLOOR * size):
         return None
     mu = friction_coefficient(scene)
-    needed = two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
-                                               pose.points[step["load_point"]], couple)
-    if not needed > mu:
+    needed = placement_friction_needed(scene, force, couple, step["load_point"])
+    if needed is None or not needed > mu:
         return None
     text = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
             f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "

@@ -28,7 +28,6 @@ import numpy as np
 from femcontact.references import two_point_statics
 from femcontact.config.scene import case_id, read_toml, resolve
 from femcontact.config.schema import set_key
-from geometry.placement import peg_pose
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = Path("results/stability")
@@ -102,14 +101,10 @@ def check(result: dict | None) -> str | None:
 def friction_needed(scene: dict) -> float | None:
     """The least mu for which a rigid peg in the scene's two-point contact holds the first step's
     load (`references.two_point_statics`); None where that model does not apply (3-D, no
-    two-point placement)."""
-    if scene.get("dim") != 2 or scene.get("peg", {}).get("placement") != "two_point":
-        return None
-    pose = peg_pose(scene)
+    two-point placement, a load point the placement does not name)."""
     step = scene["steps"][0]
     force, couple = step["force"] or [0.0, 0.0], (step["moment"] or [0.0])[0]
-    return two_point_statics.friction_needed(two_point_statics.peg_in_hole_contacts(pose), force,
-                                             pose.points[step["load_point"]], couple)
+    return two_point_statics.placement_friction_needed(scene, force, couple, step["load_point"])
 
 
 def equilibrium_summary(results: dict, needed: dict) -> list[str]:

@@ -29,7 +29,7 @@ push (-5, 1) N, l_d = 4, 5, 6: `THESIS_CASES`) the thesis' values sit beside our
 (`thesis_tilt_change_deg`, `thesis_residual_force_A`) with the ratios ours / thesis
 (`tilt_change_over_thesis`, `residual_over_thesis`), so a study of set-ups can be ranked.
 `push_friction_needed` is the least mu with which a rigid peg at the placement holds the first
-step's load (`scenarios.stability.friction_needed`): below the scene's mu the push alone cannot
+step's load (`references.two_point_statics`): below the scene's mu the push alone cannot
 make a rigid peg slide.
 
 `wedge_reason` says which condition failed ("wedged" when none). The analytic condition
@@ -44,8 +44,7 @@ import math
 import numpy as np
 
 from femcontact.references import peg_in_hole as analytic
-from femcontact.scenarios.stability import friction_needed
-from geometry.placement import peg_pose
+from femcontact.references.two_point_statics import placement_friction_needed
 from femcontact.config.scene import friction_coefficient
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
@@ -100,11 +99,11 @@ def analytic_metrics(scene: dict) -> dict:
 
 def push_friction_needed(scene: dict) -> float | None:
     """The least mu with which a rigid peg at the two-point placement holds the first step's load
-    (`scenarios.stability.friction_needed`); None for a load point the placement does not name
-    (the peg's reference point) or a scene without a two-point placement."""
-    if scene["dim"] != 2 or scene["steps"][0]["load_point"] not in peg_pose(scene).points:
-        return None
-    return friction_needed(scene)
+    (`references.two_point_statics`); None for a load point the placement does not name (the
+    peg's reference point) or a scene without a two-point placement."""
+    step = scene["steps"][0]
+    return placement_friction_needed(scene, step["force"] or [0.0, 0.0], (step["moment"] or [0.0])[0],
+                                     step["load_point"])
 
 
 def load_scale(scene: dict, history: list[dict]) -> float:
