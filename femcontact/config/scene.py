@@ -13,6 +13,7 @@ import math
 import tomllib
 from pathlib import Path
 
+from femcontact.config.dofs import RIGID_DOFS
 from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
@@ -20,7 +21,6 @@ from geometry import snap_fit as snap_fit_geometry
 
 EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support",
            "plasticity")
-RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
 
 
 def deformable_body(scene: dict) -> str:

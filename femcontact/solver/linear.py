@@ -46,10 +46,10 @@ def _ksp(matrix, comm, prefix: str, petsc_options: dict):
 class Factorization:
     """K assembled and factored every iteration (any PETSc solver the options name)."""
 
-    def __init__(self, problem, prefix: str, near_nullspace=None):
+    def __init__(self, problem, petsc_options, prefix: str, near_nullspace=None):
         self.problem = problem
         self.K = petsc.create_matrix(problem.forms.jacobian)
-        self.ksp = _ksp(self.K, problem.mesh.comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.ksp = _ksp(self.K, problem.mesh.comm, prefix, petsc_options)
         self.direct = _direct(self.ksp)
         if near_nullspace is not None and self.ksp.getPC().getType() == "gamg":
             self.K.setNearNullSpace(near_nullspace())
@@ -83,12 +83,12 @@ class Factorization:
 class ContactUpdate:
     """K_bulk factored once, the contact's low-rank part added by the Woodbury identity."""
 
-    def __init__(self, problem, prefix: str):
+    def __init__(self, problem, petsc_options, prefix: str):
         self.problem, comm = problem, problem.mesh.comm
-        self.prefix = prefix
+        self.prefix, self.petsc_options = prefix, petsc_options
         self.full = None  # a Factorization, made when a contact set is too large for the update
         self.Kb = petsc.create_matrix(problem.forms.jacobian_bulk)
-        self.ksp = _ksp(self.Kb, comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.ksp = _ksp(self.Kb, comm, prefix, petsc_options)
         self.direct = _direct(self.ksp)
         self.rows = self.Kb.getOwnershipRange()
         bc_local = np.array(sorted(problem.support_dof_set), dtype=np.int64)
@@ -129,7 +129,7 @@ class ContactUpdate:
         self.use_full = len(S) > self.max_rank
         if self.use_full:
             if self.full is None:
-                self.full = Factorization(self.problem, self.prefix)
+                self.full = Factorization(self.problem, self.petsc_options, self.prefix)
             self.full.begin()
             self.problem.add_contact_jacobian([self.full.K], [], self.problem.support_dof_set)
             self.full.factor(Kc)
@@ -226,11 +226,11 @@ def _from_columns(X: np.ndarray, like) -> list:
     return out
 
 
-def linear_solver(problem, prefix: str, near_nullspace=None):
-    """`ContactUpdate` where it applies (a bulk stiffness form, compiled only where it is
-    state-independent and `solver.contact_update` is on; a direct solver), else `Factorization`."""
-    if problem.forms.jacobian_bulk is not None:
-        update = ContactUpdate(problem, prefix)
+def linear_solver(problem, options, prefix: str, near_nullspace=None):
+    """`ContactUpdate` where it applies (`options.contact_update` on, a state-independent bulk
+    stiffness, a direct solver), else `Factorization`; `options` a `SolverOptions`."""
+    if options.contact_update and problem.forms.jacobian_bulk is not None:
+        update = ContactUpdate(problem, options.petsc_options, prefix)
         if update.direct:
             return update
-    return Factorization(problem, prefix, near_nullspace)
+    return Factorization(problem, options.petsc_options, prefix, near_nullspace)

@@ -27,12 +27,17 @@ SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", 
 
 
 class Forms(SimpleNamespace):
-    """A problem's compiled forms; the whole Jacobian only when a solver first asks for it (with
-    the low-rank contact update it is needed only where a contact set outgrows the update)."""
+    """A problem's compiled forms; the whole Jacobian and the bulk stiffness only when a solver
+    first asks for them (which of them it needs depends on its options: solver/linear.py)."""
 
     @functools.cached_property
     def jacobian(self):
         return fem.form(self.jacobian_integrand)
+
+    @functools.cached_property
+    def jacobian_bulk(self):
+        """The bulk stiffness where it does not depend on the state, else None."""
+        return None if self.jacobian_bulk_integrand is None else fem.form(self.jacobian_bulk_integrand)
 
 
 class Problem:
@@ -53,8 +58,7 @@ class Problem:
         self.dx = ufl.Measure("dx", domain=self.mesh)
         self.ds_contact = self._contact_measure(degree)
         self.shape = self._shape_constants(model.rigid)
-        rigid_name = "peg" if scene["rigid"] == "peg" else scene["rigid"]
-        mass, moments = mass_properties(model.rigid, scene["materials"][rigid_name]["density"], self.dim)
+        mass, moments = mass_properties(model.rigid, scene["materials"][scene["rigid"]]["density"], self.dim)
         if scene["rigid_body"]["mass"]:  # a given mass scales the moments of the uniform shape alike
             moments = moments * scene["rigid_body"]["mass"] / mass if mass else moments
             mass = scene["rigid_body"]["mass"]
@@ -93,7 +97,8 @@ class Problem:
     def _compile(self) -> Forms:
         """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
         stiffness where it does not depend on the state, only on `bulk_constants` (the solver
-        then factors it once: solver/linear.py); the whole `jacobian` is compiled when first used."""
+        may then factor it once: solver/linear.py); it and the whole `jacobian` are compiled
+        when first used."""
         du = ufl.TrialFunction(self.V)
         contact = self.contact_integrand * self.ds_contact
         d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
@@ -102,7 +107,7 @@ class Problem:
         self.bulk_constants = bulk_jacobian.constants() if state_free else ()
         return Forms(
             residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
-            jacobian_bulk=fem.form(bulk_jacobian) if state_free and self.scene["solver"]["contact_update"] else None,
+            jacobian_bulk_integrand=bulk_jacobian if state_free else None,
             jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du),
             jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
             contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])
@@ -158,6 +163,25 @@ class Problem:
         """Local (unrolled) indices of all held dofs: supports and symmetry planes."""
         held = {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
         return held.union(int(dof) for dofs in self.symmetry_dofs.values() for dof in dofs)
+
+    @property
+    def body_size(self) -> float:
+        """The rigid body's largest dimension (mm): the arm that turns its rotations into lengths."""
+        return self.shape["scale"]
+
+    @property
+    def contact_size(self) -> float:
+        """The element size in the contact zones (mm)."""
+        return self.model.h_contact
+
+    def stiffness_scale(self) -> float:
+        """The modulus that sets the scale of the deformable body's stiffness (MPa), from the effects."""
+        return max([c.stiffness_scale() for c in self.components] + [0.0])
+
+    def contact_stiffness(self) -> float:
+        """The stiffness of the contact against a gap (N/mm^3: traction per mm of penetration),
+        from the effects."""
+        return max([c.contact_stiffness() for c in self.components] + [0.0])
 
     @functools.cached_property
     def extent(self) -> float:

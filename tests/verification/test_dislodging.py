@@ -1,4 +1,4 @@
-"""Dynamics through contact changes (femcontact.scenarios.dynamics) against exact solutions, and the
+"""Dynamics through contact changes (femcontact.solver.dynamics) against exact solutions, and the
 dislodging scenario's bookkeeping against the thesis' numbers (ch. 4)."""
 import csv
 import json
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from femcontact.scenarios.dislodging import frame_time, one_dof_thresholds, pull_impulse
-from femcontact.scenarios.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
+from femcontact.solver.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
                                           pulse_integral)
 from femcontact.solver.loading import Schedule, pulse
 from femcontact.config.scene import resolve

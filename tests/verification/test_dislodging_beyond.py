@@ -15,7 +15,7 @@ SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dislodging_beyond_2d.t
 def free_peg(pull_duration: float, observe_duration: float):
     """The dislodging peg centred in its hole (0.025 mm clear of both walls, no contact), at
     rest, its pull step `pull_duration` s; a DynamicSimulation whose dynamic part starts there."""
-    from femcontact.scenarios.dynamics import DynamicSimulation
+    from femcontact.solver.dynamics import DynamicSimulation
 
     scene = load_scene(SCENE, ["peg.placement=centred", f"steps.2.duration={pull_duration}",
                                f"steps.3.duration={observe_duration}"])
@@ -23,7 +23,7 @@ def free_peg(pull_duration: float, observe_duration: float):
 
 
 def integrate_free(simulation, dt):
-    from femcontact.scenarios.dynamics import Event
+    from femcontact.solver.dynamics import Event
 
     outcome = simulation.integrate([2, 3], Event(rise=1.0, open_zones=False), dt_max=dt, dt_min=dt / 64,
                                    max_rise_per_increment=1.0)
