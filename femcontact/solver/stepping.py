@@ -50,6 +50,7 @@ class Simulation:
     def __init__(self, scene: dict, comm=MPI.COMM_WORLD, listeners=()):
         from femcontact.config.solver import solver_options
         from femcontact.outputs.recorder import Recorder
+        from femcontact.solver.linear import check_petsc_options
         from femcontact.solver.loading import Schedule
         from femcontact.solver.newton import SchurNewton
         from femcontact.solver.problem import Problem
@@ -57,6 +58,7 @@ class Simulation:
 
         self.scene, self.timings, self.listeners = scene, {}, list(listeners)
         self.options = solver_options(scene)
+        check_petsc_options(self.options.petsc_options)  # before meshing: a bad solver type is bad input
         start = time.perf_counter()
         self.model = build(scene, comm)
         self.timings["mesh"] = time.perf_counter() - start
