@@ -254,7 +254,7 @@ class Puller:
 
         sim, p = self.simulation, self.simulation.problem
         sim.resume(self.wedged)
-        sim.inertia.active = False
+        sim.time_stepping.active = False
         self._set_pull(force, "continuous", 0.0)
         duration = sim.scene["steps"][PULL_STEP]["duration"]
         load = sim.schedule.load(PULL_STEP, duration, duration)

@@ -49,11 +49,6 @@ converges in a few, a long one through a contact change may not converge at all,
 fast and cutting dt is cheaper than iterating."""
 
 
-def inertia_of(problem):
-    """The problem's inertia effect (None without 'inertia')."""
-    return next((c for c in problem.components if c.name == "inertia"), None)
-
-
 # -- exact integrals of the load amplitudes ------------------------------------------------
 
 def pulse_integral(t: float, frequency: float, duty: float, shape: str) -> float:
@@ -159,12 +154,12 @@ class DynamicSimulation(Simulation):
 
         super().__init__(scene, comm or MPI.COMM_WORLD)
         self.held = None  # pose (mm, rad) at which dofs that are not free are held, instead of steps.motion
-        self.inertia = inertia_of(self.problem)
-        if self.inertia is not None:
-            if self.inertia.deformable:
+        self.time_stepping = self.problem.time_stepping  # the effect that gives the rigid body its mass
+        if self.time_stepping is not None:
+            if self.time_stepping.deformable:
                 raise InputError("dynamics.deformable_inertia = true: the implicit-Euler dynamics keeps the "
                                  "deformable body quasi-static; set it false")
-            self.inertia.scheme, self.inertia.active = "euler", False
+            self.time_stepping.scheme, self.time_stepping.active = "euler", False
             self.newton.time_step_stiffness = self._time_step_stiffness
         # the quasi-static steps must not depend on the later (dynamic) ones: the stabilisation
         # tolerance is relative to the peak load of the quasi-static steps only
@@ -172,9 +167,14 @@ class DynamicSimulation(Simulation):
 
     def _time_step_stiffness(self) -> np.ndarray | None:
         """M / dt^2 per rigid dof (N/mm, N*mm/rad^2) while inertia is on, else None."""
-        if not self.inertia.active:
+        if not self.time_stepping.active:
             return None
-        return np.abs(np.diag(self.problem.rigid.mass_matrix)) / self.inertia.dt ** 2
+        return np.abs(np.diag(self.problem.rigid.mass_matrix)) / self.time_stepping.dt ** 2
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """The rigid body's velocity at the last committed increment (mm/s, rad/s)."""
+        return self.time_stepping.velocity
 
     # -- state kept in memory: every pull restarts from the wedged state ----------------------
     def snapshot(self) -> dict:
@@ -196,7 +196,7 @@ class DynamicSimulation(Simulation):
             load.motion = self.held.copy()
         p.begin_increment(load)
         self.prescribe(load)
-        dynamic = self.inertia is not None and self.inertia.active
+        dynamic = self.time_stepping is not None and self.time_stepping.active
         try:
             try:
                 return self.newton.solve(load)
@@ -239,11 +239,11 @@ class DynamicSimulation(Simulation):
         size): the motion is then periodic (the body sticks through every period) and the rest
         of the step repeats it. `monitor()`, if given, is called after every accepted
         increment and its value appended to that increment's trace entry."""
-        if self.inertia is None:
+        if self.time_stepping is None:
             raise InputError("effects: the dynamic pull needs 'inertia'")
         options = self.newton.options
         self.newton.options = replace(options, max_iterations=min(options.max_iterations, DYNAMIC_ITERATIONS))
-        self.inertia.active = True
+        self.time_stepping.active = True
         try:
             return self._integrate(steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
                                    settle_tolerance, monitor)
@@ -301,7 +301,7 @@ class DynamicSimulation(Simulation):
                 self.accept(load)
                 t = end
                 outcome.increments += 1
-                entry = (float(load.time), rise, float(self.inertia.velocity[1]), *zones)
+                entry = (float(load.time), rise, float(self.velocity[1]), *zones)
                 outcome.trace.append(entry + ((monitor(),) if monitor else ()))
                 if iterations <= 8:
                     dt = min(2 * dt, dt_max)

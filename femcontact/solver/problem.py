@@ -49,7 +49,7 @@ class Problem:
         self.effects = tuple(scene["effects"])
         if not model.supports:
             raise InputError(f"rigid = {scene['rigid']!r}: the deformable body has no support; "
-                             "hold it (e.g. make the peg the rigid body)")
+                             "make it the rigid body instead")
         self.deformable = deformable_body(scene)
         degree = scene["mesh"]["degree"]
         self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", degree))
@@ -66,6 +66,7 @@ class Problem:
         self.bcs = self._supports()
 
         self._bulk, self._contact_terms, self._traction = [], [], []
+        self.time_stepping = None  # the effect that steps the rigid body's motion in time, if any (it sets itself)
         self.components = components_for(self)
         values = {}
         for component in self.components:
