@@ -50,6 +50,19 @@ def mass_properties(rigid: dict, density: float, dim: int):
     return 0.0, np.zeros(1 if dim == 2 else 3)
 
 
+def scene_rigid_body(scene: dict, mesh, rigid: dict) -> "RigidBody":
+    """The scene's rigid body of shape `rigid` on `mesh`: its dofs (`rigid_body.dofs`) and its mass
+    from its shape and the density of its material, or `rigid_body.mass` (t) when given (the
+    moments of the uniform shape scaled alike)."""
+    dim = mesh.geometry.dim
+    mass, moments = mass_properties(rigid, scene["materials"][scene["rigid"]]["density"], dim)
+    given = scene["rigid_body"]["mass"]
+    if given:
+        moments = moments * given / mass if mass else moments
+        mass = given
+    return RigidBody(mesh, rigid, scene["rigid_body"]["dofs"], mass, moments)
+
+
 class RigidBody:
     """Pose unknowns of the rigid body, their UFL images and its mass.
 

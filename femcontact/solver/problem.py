@@ -20,7 +20,7 @@ from mpi4py import MPI
 from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
 from femcontact.errors import InputError
-from femcontact.physics.rigid_body import RigidBody, mass_properties
+from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
@@ -58,11 +58,7 @@ class Problem:
         self.dx = ufl.Measure("dx", domain=self.mesh)
         self.ds_contact = self._contact_measure(degree)
         self.shape = self._shape_constants(model.rigid)
-        mass, moments = mass_properties(model.rigid, scene["materials"][scene["rigid"]]["density"], self.dim)
-        if scene["rigid_body"]["mass"]:  # a given mass scales the moments of the uniform shape alike
-            moments = moments * scene["rigid_body"]["mass"] / mass if mass else moments
-            mass = scene["rigid_body"]["mass"]
-        self.rigid = RigidBody(self.mesh, model.rigid, scene["rigid_body"]["dofs"], mass, moments)
+        self.rigid = scene_rigid_body(scene, self.mesh, model.rigid)
         self.bcs = self._supports()
 
         self._bulk, self._contact_terms, self._traction = [], [], []
