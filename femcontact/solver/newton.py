@@ -21,8 +21,8 @@ The solver takes its settings as `SolverOptions` (femcontact/config/solver.py) a
 physical scales it needs (a stiffness modulus, the contact's stiffness and element size, the
 rigid body's size) from `Problem` methods. A line search (see `SchurNewton.line_search`) damps
 the semismooth Newton where stick/slip or contact sets change; before it, where the options
-ask for `curved_step`, a rejected full step is retried along a curved path that follows the residual's curvature
-(`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
+ask for `curved_step`, a rejected full step is retried along a curved path that follows the
+residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
 `NewtonFailure`, which the stepper answers by cutting the increment.
 """
 import numpy as np
@@ -61,7 +61,7 @@ class SchurNewton:
     `options` (`SolverOptions`) may be replaced between solves. `time_step_stiffness` is the
     hook of a time integrator (solver/dynamics.py): None, or a callable returning the diagonal
     stiffness an implicit time step currently adds to the rigid body's equations (M / dt^2 per
-    rigid dof: N/mm, N*mm/rad^2), else None. While it returns one, the rigid step is the plain
+    rigid dof: N/mm, N*mm/rad^2), or None while it adds none. While it returns one, the rigid step is the plain
     Newton step (that stiffness makes S regular, so a body out of contact reaches its new
     position in one step instead of one contact element at a time) and the round-off floor
     includes that of the inertia term."""
@@ -148,6 +148,10 @@ class SchurNewton:
         return float(np.sqrt(R_u.norm() ** 2 + np.sum(R_r[free] ** 2)))
 
     # -- Newton --------------------------------------------------------------------------
+    def _time_step(self) -> np.ndarray | None:
+        """What `time_step_stiffness` reports now (None without an integrator)."""
+        return self.time_step_stiffness() if self.time_step_stiffness else None
+
     def roundoff(self) -> float:
         """Round-off floor of the residual (N): positions known to eps * |x| (mm) under the
         contact's stiffness (`Problem.contact_stiffness`). On fine contact meshes it exceeds
@@ -156,7 +160,7 @@ class SchurNewton:
         known to eps (|q1| + |q0|), and M / dt^2 grows without bound as dt shrinks."""
         p = self.problem
         floor = np.finfo(float).eps * p.extent * p.contact_stiffness()
-        stiffness = self.time_step_stiffness() if self.time_step_stiffness else None
+        stiffness = self._time_step()
         if stiffness is not None:
             rigid = p.rigid
             spread = np.abs(rigid.values) + np.abs(rigid.r_old.value)
@@ -165,8 +169,8 @@ class SchurNewton:
 
     def stabilize(self, factor: float, tie_pose=None) -> None:
         """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm, E the
-        problem's `stiffness_scale`; rotations scaled by the body size squared) tying the rigid body to `tie_pose` (default: its last
-        converged pose). `factor` scales it (0 = off). It gives a body with no contact yet a
+        problem's `stiffness_scale`; rotations scaled by the body size squared) tying the rigid
+        body to `tie_pose` (default: its last converged pose). `factor` scales it (0 = off). It gives a body with no contact yet a
         finite stiffness, as Abaqus' contact stabilisation does; the stepper then removes it by
         continuation, or moves that pose along in pseudo time (see Simulation.increment)."""
         p = self.problem
@@ -309,8 +313,8 @@ class SchurNewton:
         """Solve S dr = rhs for the free rigid dofs inside a trust region.
 
         A body out of contact has no stiffness: S is regularised by 1e-9 of its own scale
-        (or of E * size, E the problem's `stiffness_scale`). A body pivoting on a contact under load can have a negative one
-        (the moment of the contact force as the body turns; friction makes S unsymmetric):
+        (or of E * size, E the problem's `stiffness_scale`). A body pivoting on a contact under
+        load can have a negative one (the moment of the contact force as the body turns; friction makes S unsymmetric):
         where the step meets no positive stiffness (dr . S dr <= 0) it leads uphill, away
         from equilibrium, and `shifted` lifts the spectrum of S's symmetric part to that
         floor, so the step goes downhill (modified Newton). The step is capped at one
@@ -318,7 +322,7 @@ class SchurNewton:
         its partner gets there in steps instead of leaping through it. Regularisation and
         shift only shape the step; the converged state solves the unmodified equations. Under
         an implicit time step (`time_step_stiffness`) S is regular: the plain step."""
-        if self.time_step_stiffness and self.time_step_stiffness() is not None:
+        if self._time_step() is not None:
             return np.linalg.solve(S_ff, rhs)
         p = self.problem
         size = p.body_size
