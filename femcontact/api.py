@@ -118,6 +118,10 @@ def run(scene, out=None, quiet: bool = False, checkpoint: bool = False, restart=
 
     comm = MPI.COMM_WORLD
     check_restart(scene, checkpoint, restart, comm.size)
+    if "solver" in scene:  # the linear solver's types exist in this PETSc: asked before anything is written
+        from femcontact.solver.linear import check_petsc_options
+
+        check_petsc_options(scene["solver"]["petsc_options"])
     _clean_jit_cache(comm)
     case_dir = Path(out or Path("results", "run", case_id(scene)))
     problem, created = None, not case_dir.exists()

@@ -6,13 +6,13 @@ it calls for, and its load steps. `load_scene` returns the fully resolved scene
 (every default filled in); `case_id` hashes it, so two files that differ only in
 key order or formatting describe the same case.
 """
-import functools
 import hashlib
 import json
 import math
 import tomllib
 from pathlib import Path
 
+from femcontact.config.dofs import RIGID_DOFS
 from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
@@ -20,7 +20,6 @@ from geometry import snap_fit as snap_fit_geometry
 
 EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support",
            "plasticity")
-RIGID_DOFS = {2: ("x", "y", "rz"), 3: ("x", "y", "z", "rx", "ry", "rz")}
 
 
 def deformable_body(scene: dict) -> str:
@@ -405,8 +404,8 @@ PETSC_FAMILIES = ("ksp_", "pc_", "mat_", "mg_")  # mg_levels_* and mg_coarse_* t
 
 def petsc_option_problems(options: dict) -> list[str]:
     """Complaints about solver.petsc_options: prefix-free names of linear-solver options (ksp_*, pc_*, mg_*,
-    mat_*), scalar finite values, and ksp_type, pc_type, pc_factor_mat_solver_type naming a KSP, PC and
-    factorisation package this PETSc has."""
+    mat_*) and scalar finite values. Whether the types they name exist in this PETSc is asked of
+    PETSc where a run starts (`femcontact.solver.linear.check_petsc_options`)."""
     problems = []
     for key, value in options.items():
         name = f"solver.petsc_options.{key}"
@@ -417,52 +416,7 @@ def petsc_option_problems(options: dict) -> list[str]:
             problems.append(f"{name} = {value!r}: expected a string, number or true/false")
         elif isinstance(value, float) and not math.isfinite(value):
             problems.append(f"{name} = {value!r}: not a finite number")
-    kinds = {"ksp_type": "KSP", "pc_type": "PC", "pc_factor_mat_solver_type": "Mat.Solver"}
-    for key, kind in kinds.items():
-        value = options.get(key)
-        if value is None:
-            continue
-        known = _petsc_names(kind)
-        if value not in known:
-            problems.append(f"solver.petsc_options.{key} = {value!r}: names no {kind.split('.')[0]} type of PETSc "
-                            f"(known: {', '.join(sorted(known))})")
-        elif key == "pc_factor_mat_solver_type" and not _factorization_available(value):
-            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it "
-                            "(not built in)")
     return problems
-
-
-@functools.lru_cache
-def _petsc_names(kind: str) -> frozenset:
-    from petsc4py import PETSc
-
-    table = {"KSP": PETSc.KSP.Type, "PC": PETSc.PC.Type, "Mat.Solver": PETSc.Mat.SolverType}[kind]
-    return frozenset(value for name, value in vars(table).items()
-                     if not name.startswith("_") and isinstance(value, str))
-
-
-@functools.lru_cache
-def _factorization_available(package: str) -> bool:
-    """Whether PETSc can LU-factor a 2x2 matrix with `package` (a few ms)."""
-    from petsc4py import PETSc
-
-    matrix = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
-    for i in range(2):
-        matrix.setValue(i, i, 1.0)
-    matrix.assemble()
-    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-    ksp.setOperators(matrix)
-    ksp.setType("preonly")
-    ksp.getPC().setType("lu")
-    ksp.getPC().setFactorSolverType(package)
-    try:
-        ksp.setUp()
-        return True
-    except PETSc.Error:
-        return False
-    finally:
-        ksp.destroy()
-        matrix.destroy()
 
 
 def resolve(data: dict, overrides=()) -> dict:

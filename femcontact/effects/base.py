@@ -12,7 +12,9 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
   the contact vector not written as integrals (node-to-segment elements);
 - `nodal_outputs()` (UFL values lumped to contact nodes, counted per row), `outputs()`
   (extra history columns) and `cell_fields()` (UFL values written per cell with the final
-  fields); `load_scale()`: the size of the load it applies (N).
+  fields); `load_scale()`: the size of the load it applies (N); `stiffness_scale()` and
+  `contact_stiffness()`: the scales of the stiffness it adds (the solver's regularisation,
+  stabilisation and round-off floor follow them).
 """
 import numpy as np
 
@@ -63,4 +65,12 @@ class Effect:
         return {}
 
     def load_scale(self) -> float:
+        return 0.0
+
+    def stiffness_scale(self) -> float:
+        """A modulus (MPa) setting the scale of the bulk stiffness it adds; 0 if none."""
+        return 0.0
+
+    def contact_stiffness(self) -> float:
+        """Stiffness of its contact term against a gap (N/mm^3); 0 if none."""
         return 0.0

@@ -41,3 +41,8 @@ class NormalContact(Effect):
             dstress = ufl.derivative(problem.stress, problem.u, problem.v)
             p_sigma_v = ufl.dot(dstress * ufl.FacetNormal(problem.mesh), normal)
             problem.add_contact_term(-c["theta"] / gamma_n * (p_sigma - pressure) * p_sigma_v)
+
+    def contact_stiffness(self) -> float:
+        """gamma_N = gamma E / h_contact (N/mm^3), the penalty part of the pressure per mm of gap."""
+        c = self.problem.constants
+        return float(c["gamma"].value * c["E"].value) / self.problem.contact_size

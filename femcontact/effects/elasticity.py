@@ -28,3 +28,7 @@ class Elasticity(Effect):
         problem.energy_density = law.energy_density(u, lmbda, mu, large)
         plane = None if problem.dim == 3 else "plane_stress" if plane_stress else "plane_strain"
         problem.von_mises = law.von_mises(stress, lmbda, mu, plane)
+
+    def stiffness_scale(self) -> float:
+        """Young's modulus E (MPa)."""
+        return float(self.problem.constants["E"].value)

@@ -3,7 +3,7 @@
 Each contact node remembers its anchor: the point of the rigid body, in the rigid body's
 frame, that it sticks to. The trial traction is -gamma_T times the tangential distance
 from the anchor (gamma_T = gamma_t E / h_contact, N/mm^3); it is projected on the disc of
-radius mu p. After each converged increment the anchor moves so that the next increment
+radius mu p (`physics.coulomb`). After each converged increment the anchor moves so that the next increment
 starts from the converged traction, so a load that is removed leaves the stuck state in
 place (and a peg that turns and slides is handled: anchors live in its frame).
 """
@@ -15,6 +15,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
+from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
 
 
@@ -33,17 +34,15 @@ class Friction(Effect):
         slip_local = slip_local - ufl.dot(slip_local, contact.normal_local) * contact.normal_local
         trial = -c["gamma_t"] * c["E"] / problem.model.h_contact * rigid.to_global_direction(slip_local, rigid.variable)
         normal, bound = contact.normal, c["mu"] * contact.pressure
-        if problem.dim == 2:
+        if problem.dim == 2:  # the trial's component along the tangent
             tangent = ufl.as_vector([-normal[1], normal[0]])
-            q = ufl.dot(trial, tangent)
-            tangential = ufl.max_value(ufl.min_value(q, bound), -bound) * tangent
-            size = abs(q)
+            trial = ufl.dot(trial, tangent)
+            tangential = coulomb_projection(trial, bound) * tangent
         else:
-            size = ufl.sqrt(ufl.dot(trial, trial) + 1e-30)
-            tangential = ufl.conditional(ufl.le(size, bound), trial, bound * trial / size)
-        touching = ufl.gt(contact.pressure, 0)
-        self.stick = ufl.conditional(ufl.And(touching, ufl.lt(size, bound)), 1.0, 0.0)
-        self.slip = ufl.conditional(ufl.And(touching, ufl.ge(size, bound)), 1.0, 0.0)
+            tangential = coulomb_projection(trial, bound)
+        touching, stuck = ufl.gt(contact.pressure, 0), sticks(trial, bound)
+        self.stick = ufl.conditional(ufl.And(touching, stuck), 1.0, 0.0)
+        self.slip = ufl.conditional(ufl.And(touching, ufl.Not(stuck)), 1.0, 0.0)
         problem.add_traction(tangential)
         v, w = ufl.TestFunction(problem.V), ufl.TrialFunction(problem.V)
         self.area_form = fem.form(sum(v[k] for k in range(problem.dim)) * problem.ds_contact)

@@ -3,7 +3,7 @@
 
 The rigid body's equations gain M a(r) with a from Newmark (M: mass and moments of
 inertia about the reference point); the deformable body's residual gains rho a(u) . v.
-`scheme = "euler"` (set by femcontact.scenarios.dynamics) makes the rigid body's term
+It is the problem's `time_stepping`. `scheme = "euler"` (set by femcontact.solver.dynamics) makes the rigid body's term
 implicit Euler, M (v1 - v0) / dt with v1 = (r - r_old) / dt; `active = False` switches
 the rigid body's inertia off (quasi-static steps before a dynamic phase).
 """
@@ -34,6 +34,7 @@ class Inertia(Effect):
         return {"density": scene["materials"][body]["density"], "beta": self.beta, "dt": 1.0}
 
     def build(self, problem) -> None:
+        problem.time_stepping = self  # what solver/dynamics.py integrates in time
         self.fields = {}
         if not self.deformable:
             return

@@ -7,8 +7,8 @@ loads no mesh node lies inside the corner. Each sharp corner of the rigid body i
 therefore also a slave point of a node-to-segment element against the deformable
 contact surface (the two-pass idea of engineering codes): penalty normal force
 f_n = kappa [-g]_+ with kappa = gamma * E (N/mm per mm of thickness, the stiffness a
-contact node gets from the Nitsche term), and, with friction, a Coulomb return map
-on the tangential force with the slip measured relative to the surface's material
+contact node gets from the Nitsche term), and, with friction, the Coulomb return map
+(`physics.coulomb`) on the tangential force with the slip measured relative to the surface's material
 point. The force enters the contact vector C at the segment's two nodes, so the
 rigid-body rows of the Newton system follow from C as for the integral terms. The
 element's Jacobian is taken by central differences with the contact state frozen.
@@ -22,6 +22,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
+from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
 
 TOUCHING = 1e3 * np.finfo(float).eps
@@ -113,8 +114,11 @@ class RigidCorners(Effect):
             kappa_t = float(p.constants["gamma_t"].value * p.constants["E"].value)
             trial = self.tangential_old[k] - kappa_t * (slip @ tangent)
             bound = float(p.constants["mu"].value) * f_n
-            stick = abs(trial) < bound if state is None else state[1]  # a corner at the bound keeps slipping
-            f_t = trial if stick else np.sign(trial if state is None else state[2]) * bound
+            if state is None:
+                stick, f_t = sticks(trial, bound), coulomb_projection(trial, bound)
+            else:  # the derivatives: stick or slip (in the direction it slipped) frozen
+                stick = state[1]
+                f_t = trial if stick else state[2] * bound
             force = force + f_t * tangent
             return force, s, gap, (active, stick, np.sign(trial)), f_t
         return force, s, gap, (active, True, 0.0), f_t

@@ -12,7 +12,7 @@ from dolfinx import fem
 
 from femcontact.physics.rotation import rotation_numpy, rotation_ufl
 from femcontact.physics.signed_distance import reference_point
-from femcontact.config.scene import RIGID_DOFS
+from femcontact.config.dofs import RIGID_DOFS
 
 
 def mass_properties(rigid: dict, density: float, dim: int):
@@ -48,6 +48,19 @@ def mass_properties(rigid: dict, density: float, dim: int):
         side = m * (3 * R * R + L * L) / 12
         return m, np.array([side, side, m * R * R / 2])
     return 0.0, np.zeros(1 if dim == 2 else 3)
+
+
+def scene_rigid_body(scene: dict, mesh, rigid: dict) -> "RigidBody":
+    """The scene's rigid body of shape `rigid` on `mesh`: its dofs (`rigid_body.dofs`) and its mass
+    from its shape and the density of its material, or `rigid_body.mass` (t) when given (the
+    moments of the uniform shape scaled alike)."""
+    dim = mesh.geometry.dim
+    mass, moments = mass_properties(rigid, scene["materials"][scene["rigid"]]["density"], dim)
+    given = scene["rigid_body"]["mass"]
+    if given:
+        moments = moments * given / mass if mass else moments
+        mass = given
+    return RigidBody(mesh, rigid, scene["rigid_body"]["dofs"], mass, moments)
 
 
 class RigidBody:

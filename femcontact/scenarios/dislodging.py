@@ -9,7 +9,7 @@ table says what one case of the study does from the wedged state, in one process
   equilibrium, no inertia, by bisection; computed with the wedged state and kept in its
   checkpoint, so a study computes it once per case) and the 1-DOF estimates
   (`one_dof_thresholds`);
-- method "continuous" / "pulse": one dynamic pull (scenarios.dynamics, implicit Euler)
+- method "continuous" / "pulse": one dynamic pull (solver.dynamics, implicit Euler)
   per force in `forces` and per thesis magnitude in `thesis_forces` (scaled by our
   pull-out force over the thesis' continuous threshold `thesis_reference`), and a
   bisection for the threshold force (to `tolerance`).
@@ -45,7 +45,7 @@ PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the we
 
 def pull_impulse(schedule, elapsed: float) -> float:
     """Exact impulse (N*s) of the vertical applied force from the start of the pull over `elapsed` s."""
-    from femcontact.scenarios.dynamics import step_impulse
+    from femcontact.solver.dynamics import step_impulse
 
     total, t = 0.0, elapsed
     for index in (PULL_STEP, OBSERVE_STEP):
@@ -94,7 +94,7 @@ def wedged_simulation(scene: dict, restart=None, checkpoint=None):
     """The wedged peg of `scene` (its steps before the pull, or read from the checkpoint
     `restart`; saved to `checkpoint` if given), with pull and observe steps appended for the
     pulls to set: (the DynamicSimulation, the wedging wall time in s)."""
-    from femcontact.scenarios.dynamics import DynamicSimulation
+    from femcontact.solver.dynamics import DynamicSimulation
 
     sim = DynamicSimulation(copy.deepcopy(scene), dynamic_from=PULL_STEP)
     start = time.perf_counter()
@@ -160,7 +160,7 @@ class Puller:
 
     def pull(self, force: float, method: str, frequency: float = 0.0) -> dict:
         """One dynamic pull from the wedged state; its results row."""
-        from femcontact.scenarios.dynamics import Event
+        from femcontact.solver.dynamics import Event
 
         s, sim = self.settings, self.simulation
         sim.resume(self.wedged)
@@ -254,7 +254,7 @@ class Puller:
 
         sim, p = self.simulation, self.simulation.problem
         sim.resume(self.wedged)
-        sim.inertia.active = False
+        sim.time_stepping.active = False
         self._set_pull(force, "continuous", 0.0)
         duration = sim.scene["steps"][PULL_STEP]["duration"]
         load = sim.schedule.load(PULL_STEP, duration, duration)

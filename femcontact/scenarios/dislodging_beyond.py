@@ -103,7 +103,7 @@ def apply_method(sim, loads: dict, method: str, frequency: float, duty: float, s
 def load_impulse(schedule, elapsed: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact force (N*s) and moment (N*mm*s) impulses of the pull and observe steps over the
     first `elapsed` s of the pull, the constant base included."""
-    from femcontact.scenarios.dynamics import step_impulse
+    from femcontact.solver.dynamics import step_impulse
 
     force, moment, t = 0.0, 0.0, elapsed
     for index in (PULL_STEP, OBSERVE_STEP):
@@ -142,7 +142,7 @@ class BeyondPuller(Puller):
     def run(self, method: str, magnitude: float, frequency: float = 50.0, duty: float = 1.0,
             shape: str = "triangle") -> dict:
         """One dynamic pull from the wedged state; its row."""
-        from femcontact.scenarios.dynamics import Event
+        from femcontact.solver.dynamics import Event
 
         from femcontact.solver.newton import NewtonFailure
 

@@ -192,7 +192,7 @@ def stuck_increment(simulation, index: int, step: dict) -> bool:
     state = p.state()
     try:
         p.begin_increment(load)
-        simulation._prescribe(load)
+        simulation.prescribe(load)
         mu.value = STICK_MU
         iterations = simulation.newton.solve(load)
         mu.value = real
@@ -208,7 +208,7 @@ def stuck_increment(simulation, index: int, step: dict) -> bool:
         p.restore(state)
         return False
     p.commit(load.dt)
-    simulation._record(row)
+    simulation.record(row)
     return True
 
 

@@ -16,20 +16,76 @@ right-hand sides in one call to the factor):
   a contact set larger than `max_rank` falls back to `Factorization` for that iteration.
 
 Supported dofs are identity rows of K_bulk and are left out of S (their right-hand sides
-are zero).
+are zero). `check_petsc_options` asks this PETSc whether the solver types a scene names exist.
 """
+import functools
+
 import numpy as np
 from dolfinx.fem import petsc
 from mpi4py import MPI
 from petsc4py import PETSc
+
+from femcontact.errors import InputError
 
 DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 COLUMN_BYTES = 2e8
 """Largest memory (bytes per rank) the cached columns of K_bulk^-1 may take."""
 
 
+PETSC_TYPES = {"ksp_type": "KSP", "pc_type": "PC", "pc_factor_mat_solver_type": "Mat.Solver"}
+"""The PETSc options that name a type, and the PETSc class listing that type's names."""
+
+
 class LinearSolveFailed(RuntimeError):
     """The factorisation or a solve failed (PETSc's reason in the message)."""
+
+
+def check_petsc_options(options) -> None:
+    """Refuse (InputError, one line per problem) `solver.petsc_options` whose ksp_type, pc_type or
+    pc_factor_mat_solver_type names a KSP, PC or LU factorisation package this PETSc lacks."""
+    problems = []
+    for key, kind in PETSC_TYPES.items():
+        value = options.get(key)
+        if value is None:
+            continue
+        known = _petsc_names(kind)
+        if value not in known:
+            problems.append(f"solver.petsc_options.{key} = {value!r}: names no {kind.split('.')[0]} type of PETSc "
+                            f"(known: {', '.join(sorted(known))})")
+        elif key == "pc_factor_mat_solver_type" and not _factorization_available(value):
+            problems.append(f"solver.petsc_options.{key} = {value!r}: this PETSc cannot LU-factor with it "
+                            "(not built in)")
+    if problems:
+        raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
+
+
+@functools.lru_cache
+def _petsc_names(kind: str) -> frozenset:
+    table = {"KSP": PETSc.KSP.Type, "PC": PETSc.PC.Type, "Mat.Solver": PETSc.Mat.SolverType}[kind]
+    return frozenset(value for name, value in vars(table).items()
+                     if not name.startswith("_") and isinstance(value, str))
+
+
+@functools.lru_cache
+def _factorization_available(package: str) -> bool:
+    """Whether PETSc can LU-factor a 2x2 matrix with `package` (a few ms)."""
+    matrix = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
+    for i in range(2):
+        matrix.setValue(i, i, 1.0)
+    matrix.assemble()
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOperators(matrix)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType(package)
+    try:
+        ksp.setUp()
+        return True
+    except PETSc.Error:
+        return False
+    finally:
+        ksp.destroy()
+        matrix.destroy()
 
 
 def _ksp(matrix, comm, prefix: str, petsc_options: dict):
@@ -46,10 +102,10 @@ def _ksp(matrix, comm, prefix: str, petsc_options: dict):
 class Factorization:
     """K assembled and factored every iteration (any PETSc solver the options name)."""
 
-    def __init__(self, problem, prefix: str, near_nullspace=None):
+    def __init__(self, problem, petsc_options, prefix: str, near_nullspace=None):
         self.problem = problem
         self.K = petsc.create_matrix(problem.forms.jacobian)
-        self.ksp = _ksp(self.K, problem.mesh.comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.ksp = _ksp(self.K, problem.mesh.comm, prefix, petsc_options)
         self.direct = _direct(self.ksp)
         if near_nullspace is not None and self.ksp.getPC().getType() == "gamg":
             self.K.setNearNullSpace(near_nullspace())
@@ -83,12 +139,12 @@ class Factorization:
 class ContactUpdate:
     """K_bulk factored once, the contact's low-rank part added by the Woodbury identity."""
 
-    def __init__(self, problem, prefix: str):
+    def __init__(self, problem, petsc_options, prefix: str):
         self.problem, comm = problem, problem.mesh.comm
-        self.prefix = prefix
+        self.prefix, self.petsc_options = prefix, petsc_options
         self.full = None  # a Factorization, made when a contact set is too large for the update
         self.Kb = petsc.create_matrix(problem.forms.jacobian_bulk)
-        self.ksp = _ksp(self.Kb, comm, prefix, problem.scene["solver"]["petsc_options"])
+        self.ksp = _ksp(self.Kb, comm, prefix, petsc_options)
         self.direct = _direct(self.ksp)
         self.rows = self.Kb.getOwnershipRange()
         bc_local = np.array(sorted(problem.support_dof_set), dtype=np.int64)
@@ -129,7 +185,7 @@ class ContactUpdate:
         self.use_full = len(S) > self.max_rank
         if self.use_full:
             if self.full is None:
-                self.full = Factorization(self.problem, self.prefix)
+                self.full = Factorization(self.problem, self.petsc_options, self.prefix)
             self.full.begin()
             self.problem.add_contact_jacobian([self.full.K], [], self.problem.support_dof_set)
             self.full.factor(Kc)
@@ -226,11 +282,11 @@ def _from_columns(X: np.ndarray, like) -> list:
     return out
 
 
-def linear_solver(problem, prefix: str, near_nullspace=None):
-    """`ContactUpdate` where it applies (a bulk stiffness form, compiled only where it is
-    state-independent and `solver.contact_update` is on; a direct solver), else `Factorization`."""
-    if problem.forms.jacobian_bulk is not None:
-        update = ContactUpdate(problem, prefix)
+def linear_solver(problem, options, prefix: str, near_nullspace=None):
+    """`ContactUpdate` where it applies (`options.contact_update` on, a state-independent bulk
+    stiffness, a direct solver), else `Factorization`; `options` a `SolverOptions`."""
+    if options.contact_update and problem.forms.jacobian_bulk is not None:
+        update = ContactUpdate(problem, options.petsc_options, prefix)
         if update.direct:
             return update
-    return Factorization(problem, prefix, near_nullspace)
+    return Factorization(problem, options.petsc_options, prefix, near_nullspace)

@@ -17,10 +17,12 @@ vector C (N) tested with the rigid-body modes W(u, r) of the current configurati
 where R_effects are the effects' own rigid-body terms (inertia M a(r), weight). The
 solver calls only the problem's forms and hooks; it names no effect.
 
-A line search (see `SchurNewton.line_search`) damps the semismooth Newton where
-stick/slip or contact sets change; before it, where the scene sets `solver.curved_step`, a
-rejected full step is retried along a curved path that follows the residual's curvature
-(`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
+The solver takes its settings as `SolverOptions` (femcontact/config/solver.py) and the
+physical scales it needs (a stiffness modulus, the contact's stiffness and element size, the
+rigid body's size) from `Problem` methods. A line search (see `SchurNewton.line_search`) damps
+the semismooth Newton where stick/slip or contact sets change; before it, where the options
+ask for `curved_step`, a rejected full step is retried along a curved path that follows the
+residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
 `NewtonFailure`, which the stepper answers by cutting the increment.
 """
 import numpy as np
@@ -34,8 +36,8 @@ from femcontact.solver.linear import LinearSolveFailed, linear_solver
 
 ROOT_EVALUATIONS = 12
 """Residual assemblies the line search spends at most on the root of the slope g(alpha): where g
-jumps at a stick/slip switch the bracket must shrink by 2^6 and more to find the switch's band
-(docs/bench.md compares the counts over the bench's wedging cases)."""
+jumps at a stick/slip switch the bracket must shrink by 2^6 and more to find the switch's band,
+and each assembly costs less than the Newton iteration that would otherwise follow."""
 SWITCH_EVALUATIONS = 4
 """Residual assemblies the line search spends at most on landing inside a switch (`_into_switch`)."""
 FLAT_SHRINK = 1 / 64
@@ -54,10 +56,20 @@ class NewtonFailure(RuntimeError):
 
 
 class SchurNewton:
-    """Newton solver with the rigid-body unknowns condensed by a Schur complement."""
+    """Newton solver with the rigid-body unknowns condensed by a Schur complement.
 
-    def __init__(self, problem, prefix: str = "femcontact_"):
+    `options` (`SolverOptions`) may be replaced between solves. `time_step_stiffness` is the
+    hook of a time integrator (solver/dynamics.py): None, or a callable returning the diagonal
+    stiffness an implicit time step currently adds to the rigid body's equations (M / dt^2 per
+    rigid dof: N/mm, N*mm/rad^2), or None while it adds none. While it returns one, the rigid step is the plain
+    Newton step (that stiffness makes S regular, so a body out of contact reaches its new
+    position in one step instead of one contact element at a time) and the round-off floor
+    includes that of the inertia term."""
+
+    def __init__(self, problem, options, prefix: str = "femcontact_"):
         self.problem = p = problem
+        self.options = options
+        self.time_step_stiffness = None
         forms, n_r = p.forms, len(p.rigid.names)
         self.Kc = petsc.create_matrix(forms.jacobian_contact)
         self.b_bulk = petsc.create_vector(forms.residual_bulk)
@@ -67,7 +79,7 @@ class SchurNewton:
         self.n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
         self.bc_dofs = p.support_dof_set
-        self.linear = linear_solver(p, prefix, self._near_nullspace)
+        self.linear = linear_solver(p, options, prefix, self._near_nullspace)
         self.stabilization = np.zeros((n_r, n_r))  # spring tying the rigid body to `tie_pose` (N/mm, N*mm)
         self.tie_pose = np.zeros(n_r)  # the pose the stabilisation spring ties the body to (mm, rad)
         self._assembled = None  # (load, u, r, residual) of the last residual assembly
@@ -145,22 +157,34 @@ class SchurNewton:
         return float(np.sqrt(R_u.norm() ** 2 + np.sum(R_r[free] ** 2)))
 
     # -- Newton --------------------------------------------------------------------------
+    def _time_step(self) -> np.ndarray | None:
+        """What `time_step_stiffness` reports now (None without an integrator)."""
+        return self.time_step_stiffness() if self.time_step_stiffness else None
+
     def roundoff(self) -> float:
-        """Round-off floor of the residual (N): positions known to eps * |x| (mm) under the contact
-        stiffness gamma E / h_contact. It exceeds atol on fine contact meshes (Hertz at
-        h_c = a/64.5: 3.8e-6 N; the residual stagnated at 1.6e-6 N for two iterations)."""
-        c = self.problem.constants
-        return np.finfo(float).eps * self.problem.extent * float(c["gamma"].value * c["E"].value) / self.problem.model.h_contact
+        """Round-off floor of the residual (N): positions known to eps * |x| (mm) under the
+        contact's stiffness (`Problem.contact_stiffness`). On fine contact meshes it exceeds
+        atol, which no Newton step could then reach. Under an implicit time step
+        (`time_step_stiffness`) the inertia term M (q1 - q0) / dt^2 adds its own: q1 - q0 is
+        known to eps (|q1| + |q0|), and M / dt^2 grows without bound as dt shrinks."""
+        p = self.problem
+        floor = np.finfo(float).eps * p.extent * p.contact_stiffness()
+        stiffness = self._time_step()
+        if stiffness is not None:
+            rigid = p.rigid
+            spread = np.abs(rigid.values) + np.abs(rigid.r_old.value)
+            floor += float(np.linalg.norm((np.finfo(float).eps * spread * stiffness)[rigid.free]))
+        return floor
 
     def stabilize(self, factor: float, tie_pose=None) -> None:
-        """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm; rotations
-        scaled by the body size squared) tying the rigid body to `tie_pose` (default: its last
-        converged pose). `factor` scales it (0 = off). It gives a body with no contact yet a
+        """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm, E the
+        problem's `stiffness_scale`; rotations scaled by the body size squared) tying the rigid
+        body to `tie_pose` (default: its last converged pose). `factor` scales it (0 = off). It gives a body with no contact yet a
         finite stiffness, as Abaqus' contact stabilisation does; the stepper then removes it by
         continuation, or moves that pose along in pseudo time (see Simulation.increment)."""
         p = self.problem
-        k = float(p.constants["E"].value) * p.model.h_contact
-        size = p.shape["scale"]
+        k = p.stiffness_scale() * p.contact_size
+        size = p.body_size
         scale = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size * size)
         self.stabilization = factor * np.diag(k * scale)
         self.tie_pose = p.rigid.r_old.value.copy() if tie_pose is None else np.array(tie_pose, dtype=float)
@@ -174,24 +198,24 @@ class SchurNewton:
         """The stabilisation spring's load on the rigid body at the current pose: |force| plus
         |moment| over the body size (N)."""
         p, load = self.problem, self.stabilization_load()
-        return float(np.linalg.norm(load[: p.dim]) + np.linalg.norm(load[p.dim:]) / p.shape["scale"])
+        return float(np.linalg.norm(load[: p.dim]) + np.linalg.norm(load[p.dim:]) / p.body_size)
 
     def solve(self, load) -> int:
         """Solve one increment; returns the Newton iterations taken."""
-        p, options = self.problem, self.problem.scene["solver"]
+        options = self.options
         history = []
         capped = None  # the last rigid step, if it was held at the trust-region cap
         residual = self.assemble_residual(load)
-        for iteration in range(options["max_iterations"] + 1):
+        for iteration in range(options.max_iterations + 1):
             self.release_dropped()
             R_u, R_r, scale = residual
             norm = self.norm(R_u, R_r)
             history.append(norm)
             if not np.isfinite(norm):
                 raise NewtonFailure("residual is not finite", history)
-            if norm <= options["atol"] + options["rtol"] * scale + self.roundoff():
+            if norm <= options.atol + options.rtol * scale + self.roundoff():
                 return iteration
-            if iteration == options["max_iterations"]:
+            if iteration == options.max_iterations:
                 break
             du, dr = self.direction(load, R_u, R_r)
             if self._at_cap(dr):
@@ -202,7 +226,7 @@ class SchurNewton:
             else:
                 capped = None
             residual = self.line_search(load, du, dr, (R_u, R_r, scale))
-        raise NewtonFailure(f"no convergence in {options['max_iterations']} iterations", history)
+        raise NewtonFailure(f"no convergence in {options.max_iterations} iterations", history)
 
     def direction(self, load, R_u, R_r):
         """Newton direction (du Vec, dr array) from the Schur complement."""
@@ -299,36 +323,38 @@ class SchurNewton:
         """Solve S dr = rhs for the free rigid dofs inside a trust region.
 
         A body out of contact has no stiffness: S is regularised by 1e-9 of its own scale
-        (or of E * size). A body pivoting on a contact under load can have a negative one
-        (the moment of the contact force as the body turns; friction makes S unsymmetric):
+        (or of E * size, E the problem's `stiffness_scale`). A body pivoting on a contact under
+        load can have a negative one (the moment of the contact force as the body turns; friction makes S unsymmetric):
         where the step meets no positive stiffness (dr . S dr <= 0) it leads uphill, away
         from equilibrium, and `shifted` lifts the spectrum of S's symmetric part to that
         floor, so the step goes downhill (modified Newton). The step is capped at one
         contact element size h (rotations at h / size), so a body that must travel to meet
         its partner gets there in steps instead of leaping through it. Regularisation and
-        shift only shape the step; the converged state solves the unmodified equations."""
+        shift only shape the step; the converged state solves the unmodified equations. Under
+        an implicit time step (`time_step_stiffness`) S is regular: the plain step."""
+        if self._time_step() is not None:
+            return np.linalg.solve(S_ff, rhs)
         p = self.problem
-        size = p.shape["scale"]
-        scale = max(np.abs(np.diag(S_ff)).max(), float(p.constants["E"].value) * size)
+        size = p.body_size
+        scale = max(np.abs(np.diag(S_ff)).max(), p.stiffness_scale() * size)
         floor = 1e-9 * scale
         lowest = np.linalg.eigvalsh(0.5 * (S_ff + S_ff.T)).min() if shifted else floor
         dr = np.linalg.solve(S_ff + max(floor, floor - lowest) * np.eye(len(rhs)), rhs)
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
-        cap = p.model.h_contact
+        cap = p.contact_size
         return dr * min(1.0, cap / length) if length > 0 else dr
 
     def _at_cap(self, dr) -> bool:
         """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""
         p = self.problem
-        size = p.shape["scale"]
-        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)).max()
-        return bool(length >= (1 - 1e-9) * p.model.h_contact)
+        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, p.body_size)).max()
+        return bool(length >= (1 - 1e-9) * p.contact_size)
 
     def line_search(self, load, du, dr, residual):
         """Step along (du, dr); returns the residual (R_u, R_r, scale) where it stops.
 
         The full step is taken when it lowers |R| (one assembly, reused by the next
-        iteration). When it does not and the scene asks for it (`solver.curved_step`), the
+        iteration). When it does not and the options ask for it (`curved_step`), the
         curved step (`curved_step`: two assemblies and one solve with the factor at hand) is
         tried. When that fails too but the step overshoots along the direction, that is the
         directional derivative g(alpha) = R(alpha) . (du, dr) (N*mm, the slope of the energy
@@ -346,12 +372,12 @@ class SchurNewton:
         u0, r0 = p.u.vector.copy(), p.rigid.values.copy()
         self._update(u0, r0, du, dr, 1.0)
         trial = full = self.assemble_residual(load)
-        if not p.scene["solver"]["line_search"]:
+        if not self.options.line_search:
             return trial
         trial_norm = self.norm(*trial[:2])
         if trial_norm < (1 - 1e-4) * norm:
             return trial
-        curved = self.curved_step(load, u0, r0, du, dr, residual, norm) if p.scene["solver"]["curved_step"] else None
+        curved = self.curved_step(load, u0, r0, du, dr, residual, norm) if self.options.curved_step else None
         if curved is not None:
             return curved
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
@@ -406,7 +432,7 @@ class SchurNewton:
         carries R through its least norm, that is h = R . (R_hi - R_lo) turns from negative to
         positive, the residual is least inside the band, where the switching node is stuck or
         touching and the next Jacobian sees it. Otherwise each iteration lands just short of the
-        switch, ever closer, and never crosses it (docs/bench.md). Illinois regula falsi on h
+        switch, ever closer, and never crosses it. Illinois regula falsi on h
         (at most SWITCH_EVALUATIONS assemblies); returns the residual of least norm met, the
         state left there."""
         free = self.problem.rigid.free

@@ -20,19 +20,24 @@ from mpi4py import MPI
 from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
 from femcontact.errors import InputError
-from femcontact.physics.rigid_body import RigidBody, mass_properties
+from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 
 
 class Forms(SimpleNamespace):
-    """A problem's compiled forms; the whole Jacobian only when a solver first asks for it (with
-    the low-rank contact update it is needed only where a contact set outgrows the update)."""
+    """A problem's compiled forms; the whole Jacobian and the bulk stiffness only when a solver
+    first asks for them (which of them it needs depends on its options: solver/linear.py)."""
 
     @functools.cached_property
     def jacobian(self):
         return fem.form(self.jacobian_integrand)
+
+    @functools.cached_property
+    def jacobian_bulk(self):
+        """The bulk stiffness where it does not depend on the state, else None."""
+        return None if self.jacobian_bulk_integrand is None else fem.form(self.jacobian_bulk_integrand)
 
 
 class Problem:
@@ -44,7 +49,7 @@ class Problem:
         self.effects = tuple(scene["effects"])
         if not model.supports:
             raise InputError(f"rigid = {scene['rigid']!r}: the deformable body has no support; "
-                             "hold it (e.g. make the peg the rigid body)")
+                             "make it the rigid body instead")
         self.deformable = deformable_body(scene)
         degree = scene["mesh"]["degree"]
         self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", degree))
@@ -53,15 +58,11 @@ class Problem:
         self.dx = ufl.Measure("dx", domain=self.mesh)
         self.ds_contact = self._contact_measure(degree)
         self.shape = self._shape_constants(model.rigid)
-        rigid_name = "peg" if scene["rigid"] == "peg" else scene["rigid"]
-        mass, moments = mass_properties(model.rigid, scene["materials"][rigid_name]["density"], self.dim)
-        if scene["rigid_body"]["mass"]:  # a given mass scales the moments of the uniform shape alike
-            moments = moments * scene["rigid_body"]["mass"] / mass if mass else moments
-            mass = scene["rigid_body"]["mass"]
-        self.rigid = RigidBody(self.mesh, model.rigid, scene["rigid_body"]["dofs"], mass, moments)
+        self.rigid = scene_rigid_body(scene, self.mesh, model.rigid)
         self.bcs = self._supports()
 
         self._bulk, self._contact_terms, self._traction = [], [], []
+        self.time_stepping = None  # the effect that steps the rigid body's motion in time, if any (it sets itself)
         self.components = components_for(self)
         values = {}
         for component in self.components:
@@ -93,7 +94,8 @@ class Problem:
     def _compile(self) -> Forms:
         """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
         stiffness where it does not depend on the state, only on `bulk_constants` (the solver
-        then factors it once: solver/linear.py); the whole `jacobian` is compiled when first used."""
+        may then factor it once: solver/linear.py); it and the whole `jacobian` are compiled
+        when first used."""
         du = ufl.TrialFunction(self.V)
         contact = self.contact_integrand * self.ds_contact
         d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
@@ -102,7 +104,7 @@ class Problem:
         self.bulk_constants = bulk_jacobian.constants() if state_free else ()
         return Forms(
             residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
-            jacobian_bulk=fem.form(bulk_jacobian) if state_free and self.scene["solver"]["contact_update"] else None,
+            jacobian_bulk_integrand=bulk_jacobian if state_free else None,
             jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du),
             jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
             contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])
@@ -158,6 +160,25 @@ class Problem:
         """Local (unrolled) indices of all held dofs: supports and symmetry planes."""
         held = {int(self.dim * node + k) for dofs in self.support_dofs.values() for node in dofs for k in range(self.dim)}
         return held.union(int(dof) for dofs in self.symmetry_dofs.values() for dof in dofs)
+
+    @property
+    def body_size(self) -> float:
+        """The rigid body's largest dimension (mm): the arm that turns its rotations into lengths."""
+        return self.shape["scale"]
+
+    @property
+    def contact_size(self) -> float:
+        """The element size in the contact zones (mm)."""
+        return self.model.h_contact
+
+    def stiffness_scale(self) -> float:
+        """The modulus that sets the scale of the deformable body's stiffness (MPa), from the effects."""
+        return max([c.stiffness_scale() for c in self.components] + [0.0])
+
+    def contact_stiffness(self) -> float:
+        """The stiffness of the contact against a gap (N/mm^3: traction per mm of penetration),
+        from the effects."""
+        return max([c.contact_stiffness() for c in self.components] + [0.0])
 
     @functools.cached_property
     def extent(self) -> float:

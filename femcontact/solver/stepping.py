@@ -4,7 +4,7 @@ An increment whose Newton iteration does not converge (`NewtonFailure`: too many
 iterations, a non-finite residual or a failed linear solve) is retried from the last
 converged state, first with the contact stabilisation's continuation, then by
 pseudo-transient continuation (a rigid body that must travel to the contact that holds it),
-then halved, up to `solver.max_cuts` times; after a success it grows back. A run that still fails raises
+then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. A run that still fails raises
 `SimulationFailed` naming the step, the time and the residual history. Any other
 exception is a fault, not non-convergence: it ends the run at once.
 Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
@@ -19,17 +19,6 @@ from mpi4py import MPI
 
 from femcontact.errors import InputError
 from femcontact.io import write_json_atomic, write_npz_atomic
-
-STABILIZATION_FACTORS = (1.0, 1e-1, 1e-2, 1e-4, 1e-6, 0.0)
-"""Continuation of the contact stabilisation after a plain Newton failure: the last is exact."""
-STABILIZATION_TOLERANCE = 1e-3
-"""Largest stabilisation force kept, relative to the scene's peak load on the rigid body."""
-PSEUDO_FAILURES = 6
-"""Failed pseudo steps after which `Simulation.pseudo_transient_solve` gives up."""
-PSEUDO_ITERATIONS = 600
-"""Newton iterations (failed ones included) after which `Simulation.pseudo_transient_solve` gives up."""
-PSEUDO_SOFTENING = 4.0
-"""Factor by which a converged pseudo step softens the stabilisation spring (a failed one stiffens it)."""
 
 
 class SimulationFailed(RuntimeError):
@@ -52,29 +41,35 @@ def load_points(model) -> dict:
 
 
 class Simulation:
-    """A scene's problem, solver, schedule and the history of its increments."""
+    """A scene's problem, solver, schedule and the history of its increments.
+
+    `options` are the scene's `SolverOptions`, shared with the Newton solver (`newton.options`).
+    A time integrator (solver/dynamics.py) drives its increments through `prescribe`, `record`
+    and `stabilized_solve`."""
 
     def __init__(self, scene: dict, comm=MPI.COMM_WORLD, listeners=()):
+        from femcontact.config.solver import solver_options
         from femcontact.outputs.recorder import Recorder
+        from femcontact.solver.linear import check_petsc_options
         from femcontact.solver.loading import Schedule
         from femcontact.solver.newton import SchurNewton
         from femcontact.solver.problem import Problem
         from geometry.model import build
 
         self.scene, self.timings, self.listeners = scene, {}, list(listeners)
+        self.options = solver_options(scene)
+        check_petsc_options(self.options.petsc_options)  # before meshing: a bad solver type is bad input
         start = time.perf_counter()
         self.model = build(scene, comm)
         self.timings["mesh"] = time.perf_counter() - start
         start = time.perf_counter()
         self.problem = Problem(scene, self.model)
-        self.newton = SchurNewton(self.problem)
+        self.newton = SchurNewton(self.problem, self.options)
         self.recorder = Recorder(self.problem, self.newton)
         self.timings["forms"] = time.perf_counter() - start
         self.schedule = Schedule(scene, self.problem.rigid, load_points(self.model))
         self.history: list[dict] = []
-        size = self.problem.shape["scale"]
-        self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
-                              for step in scene["steps"]] + [self.problem.load_scale(), 1e-300])
+        self.peak_load = self.peak_load_of(self.schedule.steps)
         self.stabilized_increments = 0
         self.stopped = ""  # why the run ended before its last step, if a stop condition did it
         self.events = []  # callables(index, row) -> str: a non-empty answer ends the run (`stopped`)
@@ -84,13 +79,20 @@ class Simulation:
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
+    def peak_load_of(self, steps: list) -> float:
+        """The largest load of `steps` on the rigid body, force plus moment over its size, or of
+        the effects (N): the scale of the stabilisation force a solve may keep."""
+        size = self.problem.body_size
+        return max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
+                    for step in steps] + [self.problem.load_scale(), 1e-300])
+
     @property
     def dofs(self) -> int:
         V = self.problem.V
         return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
 
     def run(self, first_step: int = 0) -> list[dict]:
-        for index, step in enumerate(self.scene["steps"][first_step:], start=first_step):
+        for index, step in enumerate(self.schedule.steps[first_step:], start=first_step):
             if not self.run_step(index, step):
                 break
         return self.history
@@ -105,7 +107,7 @@ class Simulation:
         comm.barrier()
         write_npz_atomic(directory / f"rank{comm.rank}.npz", compressed=False, **self.problem.state())
         if comm.rank == 0:
-            write_json_atomic(directory / "checkpoint.json", {"steps": len(self.scene["steps"]), "ranks": comm.size,
+            write_json_atomic(directory / "checkpoint.json", {"steps": len(self.schedule.steps), "ranks": comm.size,
                                                               "history": self.history})
 
     def load_checkpoint(self, directory: Path) -> int:
@@ -116,10 +118,11 @@ class Simulation:
             raise InputError(f"--restart {directory}: written on {meta['ranks']} ranks, run on {comm.size}")
         self.problem.restore(dict(np.load(Path(directory) / f"rank{comm.rank}.npz")))
         for row in meta["history"]:
-            self._record(row)
+            self.record(row)
         return meta["steps"]
 
-    def _record(self, row: dict, cuts: int = 0) -> None:
+    def record(self, row: dict, cuts: int = 0) -> None:
+        """Append an increment's output row to the history and pass it to the listeners."""
         self.history.append(row)
         for listener in self.listeners:
             listener(row, cuts)
@@ -131,7 +134,7 @@ class Simulation:
 
         nominal = step["duration"] / step["increments"]
         t, dt, cuts = 0.0, nominal, 0
-        max_cuts = self.scene["solver"]["max_cuts"]
+        max_cuts = self.options.max_cuts
         while t < step["duration"] * (1 - 1e-12):
             dt = min(dt, step["duration"] - t)
             load = self.schedule.load(index, t + dt, dt)
@@ -144,7 +147,7 @@ class Simulation:
                 cuts += 1
                 dt /= 2
                 continue
-            self._record(row, cuts)
+            self.record(row, cuts)
             stop = step["stop"]
             if stop["column"] and abs(row.get(stop["column"], 0.0)) > stop["value"]:
                 self.stopped = f"step {step['name']!r}: |{stop['column']}| > {stop['value']:g} at t = {load.time:.6g} s"
@@ -153,7 +156,7 @@ class Simulation:
             if self.stopped:
                 return False
             t += dt
-            if cuts and row["newton_iterations"] <= self.scene["solver"]["max_iterations"] // 2:
+            if cuts and row["newton_iterations"] <= self.options.max_iterations // 2:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
         return True
 
@@ -168,20 +171,20 @@ class Simulation:
         start = time.perf_counter()
         try:
             self._predict(load)
-            self._prescribe(load)
+            self.prescribe(load)
             self.stabilization_force = 0.0
             try:
                 iterations = self.newton.solve(load)
             except NewtonFailure:
                 p.restore(state)
-                self._prescribe(load)
+                self.prescribe(load)
                 try:
                     iterations = self.stabilized_solve(load)
                 except NewtonFailure:
                     if self.pseudo_transient_exhausted == load.step:
                         raise
                     p.restore(state)
-                    self._prescribe(load)
+                    self.prescribe(load)
                     iterations = self.pseudo_transient_solve(load)
         except BaseException:
             p.restore(state)
@@ -196,18 +199,19 @@ class Simulation:
         return row
 
     def _predict(self, load) -> None:
-        """`solver.predictor = 'extrapolate'`: start from the last converged displacement plus the
+        """`predictor = 'extrapolate'` (`SolverOptions`): start from the last converged displacement plus the
         last increment's change scaled to this dt (same step only). Under prescribed motion the
         deformable body then follows a receding rigid body: started from the last state, the
         contact would be open, Newton's first step (linearised without it) would relax the spring
         through the rigid body, and the line search would creep back to the contact."""
-        if self.scene["solver"]["predictor"] != "extrapolate" or self.last_change is None:
+        if self.options.predictor != "extrapolate" or self.last_change is None:
             return
         step, dt, change = self.last_change
         if step == load.step and dt > 0:
             self.problem.u.x.array[:] += (load.dt / dt) * change
 
-    def _prescribe(self, load) -> None:
+    def prescribe(self, load) -> None:
+        """Set the rigid dofs that are not free to the load's prescribed motion (mm, rad)."""
         rigid = self.problem.rigid
         rigid.values[~rigid.free] = load.motion[~rigid.free]
         rigid.sync()
@@ -222,12 +226,12 @@ class Simulation:
         p, iterations, accepted = self.problem, 0, None
         self.stabilized_increments += 1
         try:
-            for factor in STABILIZATION_FACTORS:
+            for factor in self.options.stabilization_factors:
                 self.newton.stabilize(factor)
                 try:
                     iterations += self.newton.solve(load)
                 except NewtonFailure:
-                    if accepted is None or self.stabilization_force > STABILIZATION_TOLERANCE * self.peak_load:
+                    if accepted is None or self.stabilization_force > self.options.stabilization_tolerance * self.peak_load:
                         raise
                     p.restore(accepted)
                     break
@@ -242,19 +246,20 @@ class Simulation:
         stabilisation spring ties the body to its pose at the start of each pseudo step, so a body
         without stiffness in some direction (pivoting on one contact node after the other contact
         opened) travels in bounded steps until it meets what holds it. A converged pseudo step
-        softens the spring PSEUDO_SOFTENING times (longer steps), down to the stiffness of the last
-        failed one times PSEUDO_SOFTENING; a failed one is retried that much stiffer. When a pseudo
-        step barely loads the spring (STABILIZATION_TOLERANCE of the peak load) the body is at
-        rest: the exact equations are solved from there (failing that, the state at rest is kept
-        and its spring force reported, as in `stabilized_solve`). It gives up after
-        PSEUDO_FAILURES failed pseudo steps or PSEUDO_ITERATIONS Newton iterations, and then for
-        the rest of the step: halving the load does not shorten the way to rest."""
+        softens the spring `pseudo_softening` times (longer steps), down to the stiffness of the
+        last failed one times `pseudo_softening`; a failed one is retried that much stiffer. When
+        a pseudo step barely loads the spring (`stabilization_tolerance` of the peak load) the
+        body is at rest: the exact equations are solved from there (failing that, the state at
+        rest is kept and its spring force reported, as in `stabilized_solve`). It gives up after
+        `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton iterations (all
+        `SolverOptions`), and then for the rest of the step: halving the load does not shorten
+        the way to rest."""
         from femcontact.solver.newton import NewtonFailure
 
-        p, iterations, spent, failures = self.problem, 0, 0, 0
+        p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
         factor, floor = 1.0, 0.0
         try:
-            while failures < PSEUDO_FAILURES and spent < PSEUDO_ITERATIONS:
+            while failures < options.pseudo_failures and spent < options.pseudo_iterations:
                 start = p.state()
                 self.newton.stabilize(factor, tie_pose=p.rigid.values)
                 try:
@@ -263,12 +268,12 @@ class Simulation:
                     p.restore(start)
                     spent += len(failure.history)
                     failures += 1
-                    factor *= PSEUDO_SOFTENING
+                    factor *= options.pseudo_softening
                     floor = factor
                     continue
                 iterations, spent = iterations + taken, spent + taken
                 force = self.newton.stabilization_force()
-                if force <= STABILIZATION_TOLERANCE * self.peak_load:
+                if force <= options.stabilization_tolerance * self.peak_load:
                     rest = p.state()
                     self.newton.stabilize(0.0)
                     try:
@@ -278,7 +283,7 @@ class Simulation:
                         p.restore(rest)
                         self.stabilization_force = force
                     return iterations
-                factor = max(factor / PSEUDO_SOFTENING, floor)
+                factor = max(factor / options.pseudo_softening, floor)
         finally:
             self.newton.stabilize(0.0)
         self.pseudo_transient_exhausted = load.step

@@ -305,6 +305,10 @@ def iter_cases(study: Study) -> Iterator[Case]:
     for params in expand(study.sweep):
         try:
             scene = resolve(_case_data(study.base, params))
+            if any(key.endswith("_type") for key in scene.get("solver", {}).get("petsc_options", {})):
+                from femcontact.solver.linear import check_petsc_options  # PETSc is imported only for these
+
+                check_petsc_options(scene["solver"]["petsc_options"])
             if "outputs" in scene and any(matches(scene, flatten(t)) for t in study.animation["select"]):
                 scene["outputs"].update(fields=True, every=study.animation["every"])  # filmed in the report
         except InputError as error:

@@ -3,6 +3,10 @@
 - geometry/ is the lowest layer: it imports nothing from femcontact;
 - no import cycles between modules (module-level and function-level imports alike);
 - the solver names no effect: effects reach it only through the problem's hooks;
+- the solver names no material constant and no body, and reads no scene key outside the two modules
+  that translate a scene (`problem.py`: unknowns and forms, `loading.py`: load steps); its settings
+  come as `SolverOptions`;
+- only the packages that assemble PETSc objects import petsc4py;
 - each effect module defines one Effect class, and docs/scenes.md is the generated page.
 """
 import ast
@@ -91,6 +95,59 @@ def identifiers(path: Path) -> set[str]:
 def test_solver_names_no_effect():
     for path in (ROOT / "femcontact" / "solver").glob("*.py"):
         assert identifiers(path) & EFFECT_WORDS == set(), path.name
+
+
+MATERIAL_CONSTANTS = {"E", "nu", "gamma", "gamma_t", "mu", "theta", "density", "yield_stress", "materials"}
+BODIES = {"peg", "hole", "indenter", "spring", "block"}
+SCENE_TRANSLATORS = {"problem.py", "loading.py"}
+PETSC_USERS = ("femcontact.solver", "femcontact.effects", "femcontact.outputs")
+"""Packages that assemble PETSc vectors and matrices (contact vectors, recorded reactions)."""
+
+
+def strings(path: Path) -> set[str]:
+    """String constants of a module, docstrings excluded."""
+    tree = ast.parse(path.read_text())
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.FunctionDef, ast.ClassDef)) and node.body
+                  and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
+    return {node.value for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings}
+
+
+def scene_reads(path: Path) -> list[str]:
+    """Subscripts of a scene (`scene[...]`, `self.scene[...]`) and of a "solver" key, as source text."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.Subscript):
+            continue
+        value = node.value
+        name = value.id if isinstance(value, ast.Name) else value.attr if isinstance(value, ast.Attribute) else ""
+        key = node.slice.value if isinstance(node.slice, ast.Constant) else None
+        if name == "scene" or key == "solver":
+            found.append(ast.unparse(node))
+    return found
+
+
+def test_solver_names_no_material_constant_no_body_and_reads_no_scene_key():
+    for path in (ROOT / "femcontact" / "solver").glob("*.py"):
+        words = {w for text in strings(path) for w in text.replace(".", " ").split()}
+        assert strings(path) & MATERIAL_CONSTANTS == set(), path.name
+        assert words & BODIES == set(), path.name
+        reads = scene_reads(path)
+        if path.name in SCENE_TRANSLATORS:
+            reads = [read for read in reads if "solver" in read]
+        assert reads == [], path.name
+
+
+def test_only_the_packages_that_assemble_petsc_objects_import_petsc4py():
+    importers = set()
+    for name, path in sources().items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            modules = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                       else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(module.split(".")[0] == "petsc4py" for module in modules):
+                importers.add(name)
+    assert importers and {name for name in importers if not name.startswith(PETSC_USERS)} == set()
 
 
 def test_each_effect_is_one_module_with_one_effect_class():

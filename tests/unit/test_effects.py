@@ -127,3 +127,17 @@ def test_plasticity_is_built_only_when_named_and_keeps_its_state_at_quadrature_p
     assert plastic.components[1].quadrature.peeq.x.array.max() > 0
     plastic.restore(before)
     assert plastic.components[1].quadrature.peeq.x.array.max() == 0.0
+
+
+def test_the_solver_gets_its_physical_scales_from_the_effects():
+    """What Newton needs of the physics (its regularisation, stabilisation and round-off floor), in
+    the scene's numbers: E = 1000 MPa, gamma = 10 (default), h_contact = 0.5 mm, the flat punch's
+    largest dimension 8 mm; with inertia the problem has a time-stepping effect."""
+    p = problem(["plane_strain"])
+    assert p.stiffness_scale() == 1000.0
+    assert p.contact_size == pytest.approx(0.5)
+    assert p.contact_stiffness() == pytest.approx(10.0 * 1000.0 / p.contact_size, rel=1e-15)
+    assert p.body_size == max(p.model.rigid["half_width"], p.model.rigid["length"]) == 8.0
+    p.constants["E"].value = 2000.0  # a sweep's new value is seen without rebuilding
+    assert p.stiffness_scale() == 2000.0 and p.contact_stiffness() == pytest.approx(20000.0 / p.contact_size)
+    assert p.time_stepping is None and problem(["plane_strain", "inertia"]).time_stepping is not None

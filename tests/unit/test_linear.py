@@ -35,7 +35,7 @@ def directions(scene_file: str, overrides: list, max_rank=None):
     R_u, R_r, _ = newton.assemble_residual(load)
     du, dr = newton.direction(load, R_u, R_r)
     update = (du.array.copy(), dr.copy(), newton.linear)
-    newton.linear = Factorization(simulation.problem, "full_")
+    newton.linear = Factorization(simulation.problem, simulation.options.petsc_options, "full_")
     du, dr = newton.direction(load, R_u, R_r)
     return update, (du.array.copy(), dr.copy())
 

@@ -132,7 +132,7 @@ def test_a_rows_newton_iterations_sum_the_solves_of_the_stabilisation_continuati
     counts the iterations of every solve that led to it (solver.max_iterations bounds each solve,
     not the row, as its doc says)."""
     from femcontact.config.scene import SOLVER
-    from femcontact.solver import newton, stepping
+    from femcontact.solver import newton
     from femcontact.solver.stepping import Simulation
 
     scene = load_scene(SCENE, ["mesh.resolution=0.5", "steps.0.increments=1"])
@@ -149,6 +149,6 @@ def test_a_rows_newton_iterations_sum_the_solves_of_the_stabilisation_continuati
     monkeypatch.setattr(newton.SchurNewton, "solve", first_fails)
     simulation.run_step(0, scene["steps"][0])
     counted = solves[1:]  # the failed plain solve is not counted
-    assert len(counted) == len(stepping.STABILIZATION_FACTORS) and simulation.stabilized_increments == 1
+    assert len(counted) == len(simulation.options.stabilization_factors) and simulation.stabilized_increments == 1
     assert simulation.history[0]["newton_iterations"] == sum(counted) > max(counted)
     assert "sum over the solves that led to the converged increment" in SOLVER["max_iterations"].doc

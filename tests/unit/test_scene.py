@@ -73,3 +73,21 @@ def test_wedging_bounds():
     assert analytic.can_wedge(40.0, 40.1, 0.2, 5.0) and not analytic.can_wedge(40.0, 40.1, 0.2, 10.0)
     assert math.degrees(analytic.tilt_crit(40.0, 40.1)) == pytest.approx(math.degrees(
         analytic.tilt_two_point(40.0, 40.1, analytic.l_crit(40.0, 40.1))), abs=1e-9)
+
+
+def test_solver_options_carry_every_solver_key_of_the_scene():
+    """The solver reads no scene: `SolverOptions` hold every [solver] key, as set, and cannot change."""
+    import dataclasses
+
+    from femcontact.config.scene import SOLVER
+    from femcontact.config.solver import SCENE_KEYS, solver_options
+
+    scene = resolve(BASE, ["solver.rtol=1e-7", "solver.predictor='extrapolate'", "solver.petsc_options={pc_type='lu'}"])
+    options = solver_options(scene)
+    assert set(SCENE_KEYS) == set(SOLVER)
+    assert {key: getattr(options, key) for key in SOLVER} == scene["solver"]
+    assert options.rtol == 1e-7 and options.predictor == "extrapolate" and options.petsc_options == {"pc_type": "lu"}
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.rtol = 1.0
+    with pytest.raises(TypeError):
+        options.petsc_options["pc_type"] = "gamg"

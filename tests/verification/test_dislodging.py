@@ -1,4 +1,4 @@
-"""Dynamics through contact changes (femcontact.scenarios.dynamics) against exact solutions, and the
+"""Dynamics through contact changes (femcontact.solver.dynamics) against exact solutions, and the
 dislodging scenario's bookkeeping against the thesis' numbers (ch. 4)."""
 import csv
 import json
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from femcontact.scenarios.dislodging import frame_time, one_dof_thresholds, pull_impulse
-from femcontact.scenarios.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
+from femcontact.solver.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
                                           pulse_integral)
 from femcontact.solver.loading import Schedule, pulse
 from femcontact.config.scene import resolve
@@ -148,7 +148,7 @@ def test_pressed_block_moves_only_while_the_pull_exceeds_mu_N():
 
     def monitor():
         p = simulation.problem
-        return float(p.rigid.values[0]) - x0, float(simulation.inertia.velocity[0])
+        return float(p.rigid.values[0]) - x0, float(simulation.velocity[0])
 
     outcome = simulation.integrate([1, 2], Event(rise=0.0, open_zones=False), dt_max=5e-4, dt_min=1e-7,
                                    max_rise_per_increment=1.0, monitor=monitor)
@@ -190,20 +190,20 @@ def test_rigid_punch_hitting_elastic_block_gains_no_energy(method):
     steps = [{"name": "impact", "duration": 1.5e-3, "amplitude": "step", "load_point": "indenter"}]
     scene = flat_punch_scene(steps, ["inertia", "plane_strain"], mass, method=method)
     simulation = DynamicSimulation(scene, dynamic_from=0)
-    p, velocity = simulation.problem, simulation.inertia.velocity
+    p, velocity = simulation.problem, simulation.velocity
     velocity[1] = -v0
 
     def energy():
         elastic = p.mesh.comm.allreduce(fem.assemble_scalar(simulation.recorder.energy))
-        return 0.5 * mass * float(simulation.inertia.velocity @ simulation.inertia.velocity) + elastic
+        return 0.5 * mass * float(simulation.velocity @ simulation.velocity) + elastic
 
     initial = 0.5 * mass * v0 ** 2
     outcome = simulation.integrate([0], Event(rise=0.0, open_zones=False), dt_max=1e-5, dt_min=1e-9,
                                    max_rise_per_increment=1.0, monitor=energy)
     energies = np.array([initial] + [row[-1] for row in outcome.trace])
     assert np.all(np.diff(energies) <= 1e-9 * initial)
-    assert simulation.inertia.velocity[1] > 0  # it bounced off
-    assert simulation.inertia.velocity[1] <= v0
+    assert simulation.velocity[1] > 0  # it bounced off
+    assert simulation.velocity[1] <= v0
     assert max(row[3] for row in outcome.trace) > 0  # there was contact
 
 

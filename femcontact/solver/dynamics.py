@@ -22,6 +22,11 @@ load (`step_impulse`), not the scheme's sums. Why this scheme:
   F/k ~ 1e-4 mm, is below anything the study measures);
 - a free body is linear: one Newton step (no trust-region cap, M/dt^2 regularises S).
 
+The integrator drives the quasi-static machinery through its public hooks:
+`SchurNewton.time_step_stiffness` (M/dt^2 while inertia is on: the plain rigid step and the
+inertia term's round-off floor), `SchurNewton.options` (fewer Newton iterations per increment),
+`Simulation.prescribe`, `Simulation.record` and `Simulation.stabilized_solve`.
+
 Output: with listeners (history file, ParaView time series), each accepted increment's row goes
 to them as in `Simulation.run_step`, and the state at the event closes the output; without, no row
 is computed.
@@ -30,47 +35,18 @@ Events: `integrate` stops at the first event (the peg risen by a distance, or al
 contact zones open), located inside the increment by re-solving the increment with a
 shorter dt (secant on the rise; bisection for the opening) and never integrates after it.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from femcontact.errors import InputError
-from femcontact.solver.newton import NewtonFailure, SchurNewton
+from femcontact.solver.newton import NewtonFailure
 from femcontact.solver.stepping import Simulation
 
 DYNAMIC_ITERATIONS = 12
 """Newton iterations allowed per dynamic increment before dt is cut: a short increment
-converges in a few (measured 3-8 on the thesis scene), a long one through a contact change
-may not converge at all, so failing fast is cheaper than iterating."""
-
-
-def inertia_of(problem):
-    """The problem's inertia effect (None without 'inertia')."""
-    return next((c for c in problem.components if c.name == "inertia"), None)
-
-
-class DynamicNewton(SchurNewton):
-    """SchurNewton whose rigid step is the plain Newton step when the body has inertia:
-    M/dt^2 makes S regular, so a body out of contact moves in one step (the quasi-static
-    trust region of one contact element per step is kept for bodies without inertia)."""
-
-    def _rigid_step(self, S_ff, rhs, shifted: bool = False) -> np.ndarray:
-        inertia = inertia_of(self.problem)
-        if inertia is not None and inertia.active:
-            return np.linalg.solve(S_ff, rhs)
-        return super()._rigid_step(S_ff, rhs, shifted)
-
-    def roundoff(self) -> float:
-        """The quasi-static round-off floor plus that of the inertia term M (q1 - q0) / dt^2 (N,
-        N*mm): q1 - q0 is known to eps (|q1| + |q0|), so with M / dt^2 of 4e15 N/mm (dt = 4e-11 s)
-        no Newton step can lower a residual of 3e-2 N (measured: stuck there for 10 iterations)."""
-        inertia = inertia_of(self.problem)
-        if inertia is None or not inertia.active:
-            return super().roundoff()
-        rigid = self.problem.rigid
-        spread = np.abs(rigid.values) + np.abs(rigid.r_old.value)
-        floor = np.finfo(float).eps * spread * np.abs(np.diag(rigid.mass_matrix)) / inertia.dt ** 2
-        return super().roundoff() + float(np.linalg.norm(floor[rigid.free]))
+converges in a few, a long one through a contact change may not converge at all, so failing
+fast and cutting dt is cheaper than iterating."""
 
 
 # -- exact integrals of the load amplitudes ------------------------------------------------
@@ -136,9 +112,9 @@ def increment_end(t: float, dt: float, marks: np.ndarray, dt_min: float) -> floa
     would be left less than `dt_min` away (the increment is stretched by < dt_min), else t + dt.
     Ends on a mark are the mark itself, so the step time never drifts from the marks; an end
     t + dt off every mark leaves at least dt_min to the next one, so no increment is shorter
-    than dt_min except when dt itself is. (Without this, t + dt summed over increments drifted
-    from the marks, and a dt doubled from one that ended on a mark doubled the drift: the case 2
-    50 Hz pull ended its last step on an increment of 3.7e-11 s, whose Newton could not converge.)"""
+    than dt_min except when dt itself is: t + dt summed over increments would drift from the
+    marks, and an increment left between the drifted end and a mark could be so short (1e-11 s)
+    that M / dt^2 swamps the residual and Newton cannot converge."""
     mark = marks[np.searchsorted(marks, t, side="right")]
     return float(mark) if mark - (t + dt) < dt_min else t + dt
 
@@ -176,20 +152,29 @@ class DynamicSimulation(Simulation):
     def __init__(self, scene: dict, dynamic_from: int, comm=None):
         from mpi4py import MPI
 
-        if scene["dynamics"]["deformable_inertia"]:
-            raise InputError("dynamics.deformable_inertia = true: the implicit-Euler dynamics keeps the "
-                             "deformable body quasi-static; set it false")
         super().__init__(scene, comm or MPI.COMM_WORLD)
-        self.newton.__class__ = DynamicNewton  # the same solver, with the uncapped dynamic rigid step
         self.held = None  # pose (mm, rad) at which dofs that are not free are held, instead of steps.motion
-        self.inertia = inertia_of(self.problem)
-        if self.inertia is not None:
-            self.inertia.scheme, self.inertia.active = "euler", False
+        self.time_stepping = self.problem.time_stepping  # the effect that gives the rigid body its mass
+        if self.time_stepping is not None:
+            if self.time_stepping.deformable:
+                raise InputError("dynamics.deformable_inertia = true: the implicit-Euler dynamics keeps the "
+                                 "deformable body quasi-static; set it false")
+            self.time_stepping.scheme, self.time_stepping.active = "euler", False
+            self.newton.time_step_stiffness = self._time_step_stiffness
         # the quasi-static steps must not depend on the later (dynamic) ones: the stabilisation
         # tolerance is relative to the peak load of the quasi-static steps only
-        size = self.problem.shape["scale"]
-        self.peak_load = max([np.linalg.norm(step["force"] or [0.0]) + np.linalg.norm(step["moment"] or [0.0]) / size
-                              for step in scene["steps"][:dynamic_from]] + [self.problem.load_scale(), 1e-300])
+        self.peak_load = self.peak_load_of(self.schedule.steps[:dynamic_from])
+
+    def _time_step_stiffness(self) -> np.ndarray | None:
+        """M / dt^2 per rigid dof (N/mm, N*mm/rad^2) while inertia is on, else None."""
+        if not self.time_stepping.active:
+            return None
+        return np.abs(np.diag(self.problem.rigid.mass_matrix)) / self.time_stepping.dt ** 2
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """The rigid body's velocity at the last committed increment (mm/s, rad/s)."""
+        return self.time_stepping.velocity
 
     # -- state kept in memory: every pull restarts from the wedged state ----------------------
     def snapshot(self) -> dict:
@@ -210,8 +195,8 @@ class DynamicSimulation(Simulation):
         if self.held is not None:
             load.motion = self.held.copy()
         p.begin_increment(load)
-        self._prescribe(load)
-        dynamic = self.inertia is not None and self.inertia.active
+        self.prescribe(load)
+        dynamic = self.time_stepping is not None and self.time_stepping.active
         try:
             try:
                 return self.newton.solve(load)
@@ -219,7 +204,7 @@ class DynamicSimulation(Simulation):
                 if dynamic or not stabilize:
                     raise
                 p.restore(state)
-                self._prescribe(load)
+                self.prescribe(load)
                 return self.stabilized_solve(load)
         except BaseException:
             p.restore(state)
@@ -254,28 +239,26 @@ class DynamicSimulation(Simulation):
         size): the motion is then periodic (the body sticks through every period) and the rest
         of the step repeats it. `monitor()`, if given, is called after every accepted
         increment and its value appended to that increment's trace entry."""
-        if self.inertia is None:
+        if self.time_stepping is None:
             raise InputError("effects: the dynamic pull needs 'inertia'")
-        solver = self.scene["solver"]
-        allowed = solver["max_iterations"]
-        solver["max_iterations"] = min(allowed, DYNAMIC_ITERATIONS)
-        self.inertia.active = True
+        options = self.newton.options
+        self.newton.options = replace(options, max_iterations=min(options.max_iterations, DYNAMIC_ITERATIONS))
+        self.time_stepping.active = True
         try:
             return self._integrate(steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
                                    settle_tolerance, monitor)
         finally:
-            solver["max_iterations"] = allowed
+            self.newton.options = options
 
     def _integrate(self, steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
                    settle_tolerance, monitor) -> Outcome:
         p = self.problem
-        size = p.shape["scale"]
-        weights = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size)
+        weights = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, p.body_size)
         y0 = float(p.rigid.values[1])
         outcome = Outcome(None, None)
         dt = dt_max
         for index in steps:
-            step = self.scene["steps"][index]
+            step = self.schedule.steps[index]
             duration = step["duration"]
             period = (1 / step["pulse"]["frequency"] if step["amplitude"] == "pulse"
                       else settle_period if step["amplitude"] == "step" else None)
@@ -311,14 +294,14 @@ class DynamicSimulation(Simulation):
                     t_event = self._locate(hit, event, index, t, dt, committed, y0, previous, rise, outcome)
                     outcome.event, outcome.time = hit, float(self.schedule.start_times[index] + t_event)
                     if self.listeners:  # the state at the event closes the output
-                        self._record(self.recorder.row(self.schedule.load(index, t_event, t_event - t), 0))
+                        self.record(self.recorder.row(self.schedule.load(index, t_event, t_event - t), 0))
                     return outcome
                 if self.listeners:  # an output row costs an assembly: only when someone listens
-                    self._record(self.recorder.row(load, iterations))
+                    self.record(self.recorder.row(load, iterations))
                 self.accept(load)
                 t = end
                 outcome.increments += 1
-                entry = (float(load.time), rise, float(self.inertia.velocity[1]), *zones)
+                entry = (float(load.time), rise, float(self.velocity[1]), *zones)
                 outcome.trace.append(entry + ((monitor(),) if monitor else ()))
                 if iterations <= 8:
                     dt = min(2 * dt, dt_max)
