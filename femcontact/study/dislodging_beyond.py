@@ -13,6 +13,8 @@ import json
 import math
 from pathlib import Path
 
+from femcontact.outputs.tables import markdown_table
+
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
                   "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
@@ -287,10 +289,8 @@ def _rankings(methods: list[dict]) -> list[str]:
 
 
 def _table(rows: list[dict], columns: list[str]) -> list[str]:
-    def cell(v):
-        return f"{v:.4g}" if isinstance(v, float) else str(v)
-    return (["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-            + ["| " + " | ".join(cell(r.get(c, "")) for c in columns) + " |" for r in rows])
+    """A Markdown table of `columns` of dict rows (a missing value empty)."""
+    return markdown_table(columns, [[r.get(c, "") for c in columns] for r in rows])
 
 
 def main(argv=None) -> int:

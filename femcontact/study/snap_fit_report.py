@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.config.scene import friction_coefficient
+from femcontact.outputs.tables import format_value
 
 
 def _figure():
@@ -155,7 +156,7 @@ def table(rows: list[dict], column) -> list[tuple]:
     body = []
     for r in cases:
         saving = (1 - column(r, "peak_insertion_force") / column(taper, "peak_insertion_force")) if taper else math.nan
-        body.append([_cell(v) for v in (
+        body.append([format_value(v) for v in (
             column(r, "name")[5:], column(r, "peg.nose"), column(r, "final_contact_force"),
             column(r, "peak_insertion_force"), column(r, "model_peak_insertion_force"),
             f"{-100 * saving:+.1f} %" if taper else "", column(r, "peak_withdrawal_force"),
