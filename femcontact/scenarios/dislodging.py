@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from femcontact.io import read_csv, read_result
 
 PULL_STEP, OBSERVE_STEP = 2, 3
 PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
@@ -453,11 +454,6 @@ THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "rotation", "thickness_mm", "
                      "thesis_over_thesis_continuous"]
 
 
-def _read_csv(path: Path) -> list[dict]:
-    with open(path, newline="") as stream:
-        return list(csv.DictReader(line for line in stream if not line.startswith("#")))
-
-
 def _number(value):
     try:
         return float(value)
@@ -467,8 +463,6 @@ def _number(value):
 
 def gather(study) -> tuple[list[dict], list[dict]]:
     """The study's pull rows and threshold rows (from the ok case directories)."""
-    from femcontact.study.runner import read_result
-
     pulls, thresholds = [], []
     for case in study.cases:
         result = read_result(case.dir)
@@ -476,7 +470,7 @@ def gather(study) -> tuple[list[dict], list[dict]]:
             continue
         s, metrics = case.scene["dislodging"], result["metrics"]
         if (case.dir / "pulls.csv").exists():
-            pulls += _read_csv(case.dir / "pulls.csv")
+            pulls += read_csv(case.dir / "pulls.csv", comments=True)
         if "threshold_force_N" in metrics:
             hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
             pullout = metrics["quasi_static_pullout_N" + ("_rotation_held" if s["rotation"] == "held" else "")]
@@ -508,7 +502,6 @@ def render_snapshots(study) -> list[Path]:
     continuous pull and the 50 Hz pulses (1 mm), zoomed on contact A; skipped without fields."""
     from femcontact.io import make_dir
     from femcontact.outputs import snapshot
-    from femcontact.study.runner import read_result
 
     paths, done = [], set()
     for case in study.cases:
@@ -638,7 +631,7 @@ def report(study) -> list[Path]:
             writer.writerows(rows)
     # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
     thesis_path = Path(__file__).resolve().parents[2] / "tests" / "data" / "dislodging_thesis.csv"
-    thesis = _read_csv(thesis_path) if thesis_path.exists() else []
+    thesis = read_csv(thesis_path, comments=True) if thesis_path.exists() else []
     frames = thesis_frames(pulls, thesis)
     if frames:
         with open(out / "thesis_frames.csv", "w", newline="") as stream:
