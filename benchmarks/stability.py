@@ -28,9 +28,9 @@ import numpy as np
 from femcontact.references import two_point_statics
 from femcontact.config.scene import case_id, read_toml, resolve
 from femcontact.config.schema import set_key
-from femcontact.outputs.result import ANSWERS
+from femcontact.io import read_result
+from femcontact.outputs.result import ANSWERS, status_counts
 from femcontact.outputs.tables import markdown_table
-from femcontact.study.runner import read_result, status_counts
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = Path("results/stability")

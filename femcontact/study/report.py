@@ -20,12 +20,13 @@ import textwrap
 from collections import Counter
 from pathlib import Path
 
-from femcontact.outputs.result import ANSWERS
+from femcontact.config.schema import get_key
+from femcontact.outputs.result import ANSWERS, status_counts
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
 from femcontact.outputs.tables import format_value, markdown_table
 from femcontact.study import units
-from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, matches, status_counts
+from femcontact.study.study_file import MAX_COLUMNS, flatten, load_study, matches
 
 
 def add_arguments(parser):

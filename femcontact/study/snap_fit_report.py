@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.config.scene import friction_coefficient
+from femcontact.config.schema import get_key
 from femcontact.outputs.tables import format_value
 
 
@@ -31,8 +32,6 @@ def _figure():
 
 
 def _selected(row: dict, select: dict) -> bool:
-    from femcontact.study.runner import get_key
-
     return all(get_key(row["scene"], key) in (value if isinstance(value, list) else [value])
                for key, value in select.items())
 
