@@ -9,10 +9,12 @@ peg length, meshes from coarse to fine,
 2-D and a few coarse 3-D cases), writes them as one study (results/stability/study.toml,
 explicit cases, so a rerun resumes) and runs it with the study runner: every case in its
 own process under a time limit. Then each result is checked: either `ok` with every
-metric finite or null, or `failed` with a structured reason (a `SimulationFailed` naming
-the step, the time and the residual history, or the time limit). A NaN, a traceback or a
-missing result is a defect. Writes results/stability/stability.md: the converged fraction,
-the failure reasons and the slowest cases; exits 1 on any defect.
+metric finite or null, `no_equilibrium` with its reason (the load has no static equilibrium:
+an answer), or `failed` with a structured reason (a `SimulationFailed` naming the step, the
+time and the residual history, or the time limit). A NaN, a traceback or a missing result is
+a defect. Writes results/stability/stability.md: the cases ok, without a static equilibrium
+and failed, counted apart, the reasons of those not ok and the slowest cases; exits 1 on any
+defect.
 
     python -m benchmarks.stability [--count 40] [--count-3d 4] [--seed 1]
 """
