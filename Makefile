@@ -119,24 +119,24 @@ $(STUDIES): %: setup
 	  if [ $$status -le 1 ]; then $(FEMCONTACT) report studies/$@.toml || exit $$?; fi; exit $$status
 
 bench: setup
-	$(PY) -m femcontact.scenarios.bench
-	$(PY) -m femcontact.scenarios.bench_hertz_3d
+	$(PY) -m benchmarks.bench
+	$(PY) -m benchmarks.bench_hertz_3d
 
 # The 3-D Hertz benchmark beside GetFEM alone (also the end of `make bench`): results/bench/hertz_3d.md
 bench_hertz_3d: setup
-	$(PY) -m femcontact.scenarios.bench_hertz_3d
+	$(PY) -m benchmarks.bench_hertz_3d
 
 # Plasticity on the wedging case, an edge radius under refinement, its cost; results/plasticity/plasticity.md
 plasticity: setup
-	$(PY) -m femcontact.scenarios.plasticity
+	$(PY) -m benchmarks.plasticity
 
 # What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
 accuracy: setup
-	$(PY) -m femcontact.scenarios.accuracy --with-3d
+	$(PY) -m benchmarks.accuracy --with-3d
 
 # Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
 stability: setup
-	$(PY) -m femcontact.scenarios.stability $(STABILITY_FLAGS)
+	$(PY) -m benchmarks.stability $(STABILITY_FLAGS)
 
 clean:
 	rm -rf results

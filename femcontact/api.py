@@ -218,7 +218,7 @@ class Study:
     _study: object = field(init=False, repr=False)
 
     def __post_init__(self):
-        from femcontact.study.runner import load_study
+        from femcontact.study.study_file import load_study
 
         self.path, self.results_root = Path(self.path), Path(self.results_root)
         self._study = load_study(self.path, self._assignments(), self.results_root)

@@ -1,10 +1,14 @@
-"""Files written whole or not at all, and file-system failures as one clear message.
+"""Files written whole or not at all, file-system failures as one clear message, and the
+readers of what a run writes.
 
 Every output file is written under a temporary name in its own directory, flushed to
 disk, then renamed into place; on any failure the temporary is removed and a
 `WriteError` names the file and the reason (read-only file system, disk full, ...), so
-a reader never sees a truncated file and no stray temporaries are left.
+a reader never sees a truncated file and no stray temporaries are left. `read_csv` reads
+every CSV file (history.csv, pulls.csv, a study's tables, the published tables in
+tests/data), `read_result` a case's result.json.
 """
+import csv
 import json
 import math
 import os
@@ -120,3 +124,27 @@ def remove_stale_compilations(directory: Path, older_than: float) -> None:
                 source.with_suffix(".c.cached").unlink(missing_ok=True)
         elif name.endswith(".c.cached") and name.removesuffix(".cached") not in names:
             source.unlink(missing_ok=True)
+
+
+def read_csv(path, numbers: bool = False, comments: bool = False) -> list[dict]:
+    """The rows of a CSV file with a header line, as {column: cell}: the texts as written, or with
+    `numbers` every cell that reads as a number a float (the others kept as text: names, True,
+    empty cells). `comments`: lines starting with '#' are skipped (the published tables' sources)."""
+    with open(path, newline="") as stream:
+        rows = list(csv.DictReader(line for line in stream if not (comments and line.startswith("#"))))
+    return [{key: _number_or_text(cell) for key, cell in row.items()} for row in rows] if numbers else rows
+
+
+def _number_or_text(cell: str):
+    try:
+        return float(cell)
+    except (TypeError, ValueError):
+        return cell
+
+
+def read_result(case_dir) -> dict | None:
+    """A case's result.json, or None when it has none (not run, or interrupted)."""
+    try:
+        return json.loads((Path(case_dir) / "result.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        return None

@@ -1,7 +1,7 @@
 """A femcontact process's start and end: MPI started for meshing, Open MPI's singleton defaults,
 no scan of the installed distributions for two version strings, the compiler's logging kept
 quiet, and the end without the interpreter's teardown. Used by the command line, the study's
-warm workers and the scenario programs (make bench, accuracy, stability).
+warm workers and the measurement programs (benchmarks/: make bench, accuracy, stability).
 """
 import ctypes
 import importlib

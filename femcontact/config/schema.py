@@ -184,6 +184,19 @@ def set_key(data: dict, dotted: str, value) -> None:
         node[last] = value
 
 
+def get_key(scene: dict, dotted: str):
+    """scene['a'][1]['b'] for 'a.1.b'; None when absent."""
+    node = scene
+    for part in dotted.split("."):
+        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            return None
+    return node
+
+
 def _child(node, part: str, dotted: str):
     """The table or array `node[part]` on the way to `dotted` (tables are created as needed)."""
     if isinstance(node, list):

@@ -7,7 +7,7 @@ import math
 import os
 from pathlib import Path
 
-from femcontact.io import WriteError, describe
+from femcontact.io import WriteError, describe, read_csv
 
 
 class HistoryWriter:
@@ -56,8 +56,7 @@ class HistoryWriter:
 
 def read_history(path) -> dict:
     """A history.csv (or any CSV of rows) as {column: numpy array} (see `columns`)."""
-    with open(path, newline="") as stream:
-        return columns(list(csv.DictReader(stream)))
+    return columns(read_csv(path))
 
 
 def columns(rows: list[dict]) -> dict:

@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from femcontact.io import read_csv, read_result
 
 PULL_STEP, OBSERVE_STEP = 2, 3
 PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
@@ -392,7 +393,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     they converge monotonically, else against the finest. Wall time of a row: wedge, pull-out
     and its pulls (the wedge of mesh 0.5 is shared by the time-step rows and counted in each)."""
     from femcontact.config.scene import load_scene
-    from femcontact.scenarios.accuracy import ROOT, richardson
+    from femcontact.references.richardson import richardson
 
     settings = [("time step dt_max", f"dt_max {dt * 1e3:g} ms, mesh 0.5", 0.5, dt) for dt in ACCURACY_DT]
     settings += [("mesh (P1)", f"resolution {r:g}, dt_max 5 ms", r, ACCURACY_DT[0]) for r in ACCURACY_RESOLUTIONS]
@@ -400,7 +401,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     for knob, label, resolution, dt_max in settings:
         if resolution not in pullers:
             start = time.perf_counter()
-            scene = load_scene(ROOT / "scenes" / "dislodging_2d.toml",
+            scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
                                [f"mesh.resolution={resolution}", "dislodging.method=pulse",
                                 f"dislodging.tolerance={ACCURACY_TOLERANCE}"])
             pullers[resolution] = (Puller(scene, held_pullout=False), time.perf_counter() - start)
@@ -453,11 +454,6 @@ THRESHOLD_COLUMNS = ["case", "method", "pulse_hz", "rotation", "thickness_mm", "
                      "thesis_over_thesis_continuous"]
 
 
-def _read_csv(path: Path) -> list[dict]:
-    with open(path, newline="") as stream:
-        return list(csv.DictReader(line for line in stream if not line.startswith("#")))
-
-
 def _number(value):
     try:
         return float(value)
@@ -467,8 +463,6 @@ def _number(value):
 
 def gather(study) -> tuple[list[dict], list[dict]]:
     """The study's pull rows and threshold rows (from the ok case directories)."""
-    from femcontact.study.runner import read_result
-
     pulls, thresholds = [], []
     for case in study.cases:
         result = read_result(case.dir)
@@ -476,7 +470,7 @@ def gather(study) -> tuple[list[dict], list[dict]]:
             continue
         s, metrics = case.scene["dislodging"], result["metrics"]
         if (case.dir / "pulls.csv").exists():
-            pulls += _read_csv(case.dir / "pulls.csv")
+            pulls += read_csv(case.dir / "pulls.csv", comments=True)
         if "threshold_force_N" in metrics:
             hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
             pullout = metrics["quasi_static_pullout_N" + ("_rotation_held" if s["rotation"] == "held" else "")]
@@ -508,7 +502,6 @@ def render_snapshots(study) -> list[Path]:
     continuous pull and the 50 Hz pulses (1 mm), zoomed on contact A; skipped without fields."""
     from femcontact.io import make_dir
     from femcontact.outputs import snapshot
-    from femcontact.study.runner import read_result
 
     paths, done = [], set()
     for case in study.cases:
@@ -638,7 +631,7 @@ def report(study) -> list[Path]:
             writer.writerows(rows)
     # the thesis' table as copied into the repository for the tests (plots only; skipped if absent)
     thesis_path = Path(__file__).resolve().parents[2] / "tests" / "data" / "dislodging_thesis.csv"
-    thesis = _read_csv(thesis_path) if thesis_path.exists() else []
+    thesis = read_csv(thesis_path, comments=True) if thesis_path.exists() else []
     frames = thesis_frames(pulls, thesis)
     if frames:
         with open(out / "thesis_frames.csv", "w", newline="") as stream:

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from femcontact.io import read_csv
 from femcontact.scenarios.dislodging import (OBSERVE_STEP, PULL_STEP, Puller, one_dof_thresholds,
                                             wedged_simulation)
 from femcontact.solver.loading import Schedule
@@ -372,8 +373,7 @@ class Wedge3D:
         self.probes = Path(probes) if probes else None
         known = []
         if self.probes and self.comm.rank == 0 and self.probes.is_file():
-            with open(self.probes, newline="") as stream:
-                known = list(csv.DictReader(stream))
+            known = read_csv(self.probes)
         self.known = {(row["method"], round(float(row["magnitude"]), 6)): row["holds"] == "True"
                       for row in self.comm.bcast(known, root=0)}
         self.resumed = len(self.known)

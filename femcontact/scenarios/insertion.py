@@ -331,7 +331,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     of the three finest resolutions, else the finest), against the number of load increments at
     resolution 1 and against Newton's rtol (errors against the finest setting of that knob). The
     scene's own setting (resolution 1, 52 increments, rtol 1e-9) is run once and shown in each knob."""
-    from femcontact.scenarios.accuracy import richardson
+    from femcontact.references.richardson import richardson
 
     accuracy_case("warm-up", "", ["mesh.resolution=0.5", "steps.0.increments=3", "steps.0.support_motion.y=-1.2"])
     mesh = [accuracy_case(f"resolution {r:g}", "mesh (P1)", [f"mesh.resolution={r}"]) for r in ACCURACY_RESOLUTIONS]

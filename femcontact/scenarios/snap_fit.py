@@ -271,7 +271,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     resolution at the scene's 40 increments per step, and increments per step at resolution 1.
     Errors: the insertion force ratio against the statics tan(alpha + phi); the peak insertion
     force against a Richardson extrapolation of each knob's three finest settings (or the finest)."""
-    from femcontact.scenarios.accuracy import richardson
+    from femcontact.references.richardson import richardson
 
     accuracy_case("", "warm-up", ["mesh.resolution=0.5"])
     resolutions, increments = (0.5, 0.7, 1.0, 1.4, 2.0), (10, 20, 40, 80, 160, 320)

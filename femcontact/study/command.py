@@ -10,11 +10,13 @@ import sys
 import time
 
 from femcontact.errors import InputError
-from femcontact.io import WriteError, describe, make_dir
+from femcontact.io import WriteError, describe, make_dir, read_result
+from femcontact.outputs.result import status_counts
 from femcontact.study import slurm
 from femcontact.study.database import Database
-from femcontact.study.runner import (Case, Progress, Runner, Study, _check_launcher, _describe, iter_cases,
-                                     load_study, make_cases, read_result, status_counts)
+from femcontact.study.progress import Progress
+from femcontact.study.runner import Runner
+from femcontact.study.study_file import Case, Study, check_launcher, describe_params, iter_cases, load_study, make_cases
 
 MAX_CASES = 10_000
 """Cases a study may have unless --max-cases says more: each is at least a process start and a solve."""
@@ -57,8 +59,8 @@ def command(args) -> int:
         raise InputError(f"--jobs {args.jobs}: expected >= 0 (0 = cores // ranks per case)")
     if args.ranks_per_case is not None and args.ranks_per_case < 1:
         raise InputError(f"--ranks-per-case {args.ranks_per_case}: expected >= 1")
-    if args.launcher is not None and _check_launcher(args.launcher):
-        raise InputError(f"--launcher {args.launcher!r}: {_check_launcher(args.launcher)}")
+    if args.launcher is not None and check_launcher(args.launcher):
+        raise InputError(f"--launcher {args.launcher!r}: {check_launcher(args.launcher)}")
     if args.max_cases < 1:
         raise InputError(f"--max-cases {args.max_cases}: expected >= 1")
     study = load_study(args.study, args.set, args.results, max_cases=None if args.list else args.max_cases,
@@ -194,7 +196,7 @@ def _list(study: Study) -> int:
         print(f"study {study.settings['name']}: {study.count} cases in the sweep", file=sys.stderr, flush=True)
     for case in iter_cases(study):
         result = read_result(case.dir)
-        print(f"{case.id}  {result['status'] if result else 'todo':6s}  {_describe(case.params)}")
+        print(f"{case.id}  {result['status'] if result else 'todo':6s}  {describe_params(case.params)}")
     return 0
 
 
@@ -208,6 +210,6 @@ def _summary(study: Study, start: float) -> int:
     for case, result in results:
         if result["status"] != "ok":
             what = "failed" if result["status"] == "failed" else "no equilibrium"
-            print(f"  {what} {case.id} {_describe(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
+            print(f"  {what} {case.id} {describe_params(case.params)}: {result['reason']} (log: {case.dir / 'log.txt'})")
     print(f"results: {study.database} and {study.results / 'results.csv'}; cases in {study.results / 'cases'}/")
     return 1 if counts["failed"] else 0

@@ -10,8 +10,10 @@ and summary.md with the ranking of the ways out by impulse and by peak force.
 import argparse
 import csv
 import json
-import math
 from pathlib import Path
+
+from femcontact.io import read_csv, read_result
+from femcontact.outputs.tables import markdown_table
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
@@ -32,11 +34,6 @@ PEAK_COLUMNS = ["shape", "pulse_hz", "duty", "threshold_force_N", "bracket_N", "
                 "dislodge_time_at_threshold_s", "pulls"]
 
 
-def _read_csv(path: Path) -> list[dict]:
-    with open(path, newline="") as stream:
-        return list(csv.DictReader(stream))
-
-
 def _write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
     with open(path, "w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=columns, extrasaction="ignore")
@@ -46,7 +43,7 @@ def _write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
 
 def _cases(name: str, root: Path) -> list[tuple]:
     """(case, metrics) of the study's cases that finished ok."""
-    from femcontact.study.runner import load_study, read_result
+    from femcontact.study.study_file import load_study
 
     study = load_study(STUDIES / f"{name}.toml", results_root=root)
     out = []
@@ -89,7 +86,7 @@ def method_rows(cases) -> tuple[list[dict], list[dict]]:
                      "loads": LOADS[s["method"]].format(base_pull=s["base_pull"]),
                      **{k: m.get(k, "") for k in METHOD_COLUMNS if k in m}})
         if (case.dir / "pulls.csv").exists():
-            mine = _read_csv(case.dir / "pulls.csv")
+            mine = read_csv(case.dir / "pulls.csv")
             if default_base_pull(rows[-1]):  # the plot's one line per method
                 pulls += mine
             out = [r for r in mine if r["dislodged"] == "True"]
@@ -112,7 +109,7 @@ def name(row: dict) -> str:
 def optimum_of(cases) -> tuple[dict | None, list[dict]]:
     for case, m in cases:
         if case.scene["dislodging"]["task"] == "optimise" and (case.dir / "optimum.json").exists():
-            return json.loads((case.dir / "optimum.json").read_text()), _read_csv(case.dir / "pulls.csv")
+            return json.loads((case.dir / "optimum.json").read_text()), read_csv(case.dir / "pulls.csv")
     return None, []
 
 
@@ -287,10 +284,8 @@ def _rankings(methods: list[dict]) -> list[str]:
 
 
 def _table(rows: list[dict], columns: list[str]) -> list[str]:
-    def cell(v):
-        return f"{v:.4g}" if isinstance(v, float) else str(v)
-    return (["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-            + ["| " + " | ".join(cell(r.get(c, "")) for c in columns) + " |" for r in rows])
+    """A Markdown table of `columns` of dict rows (a missing value empty)."""
+    return markdown_table(columns, [[r.get(c, "") for c in columns] for r in rows])
 
 
 def main(argv=None) -> int:

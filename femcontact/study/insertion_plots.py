@@ -9,21 +9,15 @@
 - `wedging_window`: the tilt at two-point onset against the clearance ratio c, with the window
   c/mu < theta < sqrt(2c) where wedging is possible, cases marked wedged or not by the FE.
 """
-import csv
 import math
 import re
 from pathlib import Path
 
 import numpy as np
 
+from femcontact.io import read_csv
+
 PHASE_COLOURS = {"chamfer": "tab:orange", "edge": "tab:purple", "one_point": "tab:green", "two_point": "tab:red"}
-
-
-def _float(value):
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return value
 
 
 def _flag(row: dict, name: str) -> bool:
@@ -39,9 +33,7 @@ def case_curves(row: dict, results: Path):
     scene = row["scene"]
     if row["status"] != "ok" or not path.exists() or "compliant_support" not in scene.get("effects", []):
         return None
-    with open(path) as handle:
-        history = [{k: _float(v) for k, v in r.items()} for r in csv.DictReader(handle)]
-    curve = force_history(scene, history)
+    curve = force_history(scene, read_csv(path, numbers=True))
     return curve, analytic_curve(scene, max(curve["depth"][-1], 1e-3))
 
 

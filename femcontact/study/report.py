@@ -20,11 +20,13 @@ import textwrap
 from collections import Counter
 from pathlib import Path
 
-from femcontact.outputs.result import ANSWERS
+from femcontact.config.schema import get_key
+from femcontact.outputs.result import ANSWERS, status_counts
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
+from femcontact.outputs.tables import format_value, markdown_table
 from femcontact.study import units
-from femcontact.study.runner import MAX_COLUMNS, flatten, get_key, load_study, matches, status_counts
+from femcontact.study.study_file import MAX_COLUMNS, flatten, load_study, matches
 
 
 def add_arguments(parser):
@@ -421,9 +423,7 @@ def write_markdown(blocks: list[tuple], path: Path) -> Path:
         elif kind == "p":
             lines += [content[0], ""]
         elif kind == "table":
-            header, body = content
-            lines += ["| " + " | ".join(map(_markdown, header)) + " |", "|" + "---|" * len(header)]
-            lines += ["| " + " | ".join(map(_markdown, cells)) + " |" for cells in body] + [""]
+            lines += [*markdown_table(*content), ""]
         elif kind == "video":
             lines += [f"[![{content[2]}]({content[1]})]({content[0]})", ""]
         else:
@@ -491,8 +491,4 @@ def _cell(value, name: str = "") -> str:
     """A table cell: yes/no for flags, numbers to 4 significant digits, lists as (a, b)."""
     if name in units.FLAGS and value in (0, 1):
         return "yes" if value else "no"
-    return units.format_value(value).replace("\n", " ")
-
-
-def _markdown(text: str) -> str:
-    return text.replace("|", "\\|")
+    return format_value(value).replace("\n", " ")

@@ -1,429 +1,35 @@
-"""`femcontact study STUDY.toml`: expand a sweep into cases and run the ones not done yet.
+"""`femcontact study STUDY.toml`: run the cases of a study (study_file.py) not done yet.
 
-A study file names a base scene, inline overrides and a sweep (a grid, zipped
-lists and explicit cases, over dotted scene keys such as `steps.1.force`). Every
-case is resolved and validated before anything runs; its id is the hash of its
-resolved scene (`femcontact.scene.case_id`), so re-running a study finds its
-finished cases again: a case is done iff `results/NAME/cases/ID/result.json`
-exists (written atomically by `femcontact run`, or by this runner for a case
-that timed out or crashed without one).
-
-Cases run as subprocesses through the study's launcher (`mpirun -n {ranks}` by
-default, `srun -n {ranks}` under SLURM), `jobs` at a time; one-rank cases under the
-default launcher run in warm worker processes instead, one per job slot, each paying
-the start-up once (workers.py). Each job slot has its own FFCx JIT cache
+A case is done iff `results/NAME/cases/ID/result.json` exists (written atomically by
+`femcontact run`, or by this runner for a case that timed out or crashed without one), so
+running a study again resumes it. Cases run as subprocesses through the study's launcher
+(`mpirun -n {ranks}` by default, `srun -n {ranks}` under SLURM), `jobs` at a time; one-rank
+cases under the default launcher run in warm worker processes instead, one per job slot, each
+paying the start-up once (workers.py). Each job slot has its own FFCx JIT cache
 (`XDG_CACHE_HOME`), held with a file lock for the runner's lifetime, so concurrent first
-compilations never contend for the same cache, even between two studies run at once.
-See docs/studies.md.
+compilations never contend for the same cache, even between two studies run at once. Every
+case records the software that ran it (`provenance`). See docs/studies.md.
 """
 import ctypes
 import fcntl
 import functools
 import itertools
 import json
-import math
 import os
-import re
 import select
 import shlex
 import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
-from femcontact.outputs.result import STATUSES
 from femcontact.errors import InputError
-from femcontact.io import WriteError, describe, make_dir, remove_stale_compilations, write_json_atomic, write_text_atomic
-from femcontact.config.schema import Field, TableList, set_key, validate
-from femcontact.config.scene import apply_overrides, case_id, read_toml, resolve
+from femcontact.io import (WriteError, describe, make_dir, read_result, remove_stale_compilations, write_json_atomic,
+                           write_text_atomic)
+from femcontact.study.study_file import SCHEMA, Case, Study, to_toml
 from femcontact.study.workers import Pool, Worker
-
-_TABLE = Field("any", {}, "a table", check=lambda v: None if isinstance(v, dict) else "must be a table")
-_TABLES = Field("any", [], "an array of tables",
-                check=lambda v: None if isinstance(v, list) and all(isinstance(t, dict) for t in v)
-                else "must be an array of tables")
-
-SCHEMA = {
-    "study": {
-        "name": Field("str", doc="study name: results go to results/NAME/",
-                      check=lambda v: None if v and "/" not in v and not v.startswith(".") else "not a plain name"),
-        "description": Field("str", "", "what the study is for"),
-        "scene": Field("str", doc="base scene file, relative to the study file"),
-        "jobs": Field("int", 0, "cases run at once; 0 = cores // ranks_per_case", min=0),
-        "ranks_per_case": Field("int", 1, "MPI ranks per case", min=1),
-        "time_limit": Field("float", 600.0, "seconds per case; a case past it is killed and recorded failed",
-                            positive=True),
-        "launcher": Field("str", "mpirun -n {ranks}", "command prefix that starts an MPI job of {ranks} ranks",
-                          check=lambda v: _check_launcher(v)),
-        "shared_steps": Field("int", 0, "> 0: cases agreeing on their first steps compute them once", min=0),
-        "workers": Field("bool", True, "one-rank cases under the default launcher run in warm worker processes "
-                         "(one per job, importing femcontact once); false: a fresh launcher process per case"),
-    },
-    "scene": _TABLE,
-    "sweep": {
-        "grid": Field("any", {}, "key = [values]: every combination", check=lambda v: _check_lists(v, False)),
-        "zip": Field("any", {}, "key = [values]: lists of one length, taken together",
-                     check=lambda v: _check_lists(v, True)),
-        "cases": _TABLES,
-    },
-    "plot": TableList({
-        "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
-        "y": Field("str", doc="column on the y axis"),
-        "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter, wedge_map (wedged markers + analytic bounds), force_curves "
-                      "(list metrics against each other, reduced model beside), sweep (a metric, model beside), jam_map "
-                      "(snap fit); insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
-                      choices=("line", "scatter", "wedge_map", "force_curves", "sweep", "jam_map", "insertion_history",
-                               "jamming_diagram", "wedging_window")),
-        "select": Field("any", {}, "force_curves, sweep: only cases whose scene has key = value (or one of a list)",
-                        check=lambda v: None if isinstance(v, dict) else "must be a table"),
-        "logx": Field("bool", False, "logarithmic x axis"),
-        "logy": Field("bool", False, "logarithmic y axis"),
-        "title": Field("str", "", "plot title"),
-        "file": Field("str", "", "PNG file name in results/NAME/ (default Y_vs_X.png)"),
-    }, "plots written by `femcontact report`", default=[]),
-    "snapshots": {
-        "select": _TABLES,
-        "field": Field("str", "von_mises", "field shown", choices=("von_mises",)),
-        "zoom": Field("any", "", "named point of the fields file, or [x, y(, z), radius]",
-                      check=lambda v: None if isinstance(v, str) or (
-                          isinstance(v, list) and len(v) in (3, 4) and all(isinstance(x, (int, float)) for x in v))
-                      else "expected a name or [x, y(, z), radius]"),
-        "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
-        "scale": Field("float", 1.0, "displacement magnification", min=0.0),
-    },
-    "animation": {
-        "select": Field("any", [], "cases filmed in the report (femcontact animate), as [snapshots] selects them; "
-                        "they run with outputs.fields = true",
-                        check=lambda v: None if isinstance(v, list) and all(isinstance(t, dict) and t for t in v)
-                        else "must be an array of non-empty tables"),
-        "scale": Field("float", 1.0, "displacement magnification of the films", min=0.0),
-        "every": Field("int", 1, "film every N-th increment (outputs.every of the filmed cases)", min=1),
-    },
-    "report": {
-        "columns": Field("strs", [], "headline columns of summary.md and index.html (at most MAX_COLUMNS; "
-                         "default: swept keys, status, the family's primary metrics, wall time)",
-                         check=lambda v: _check_columns(v)),
-    },
-}
-MAX_COLUMNS = 25  # a wider table is not readable; every column stays in results.csv
-
-
-def _check_columns(columns: list[str]) -> str | None:
-    bad = [c for c in columns if not c.strip()] or [c for i, c in enumerate(columns) if c in columns[:i]]
-    if bad:
-        return f"column {bad[0]!r} is empty or repeated"
-    if len(columns) > MAX_COLUMNS:
-        return f"{len(columns)} columns, at most {MAX_COLUMNS} (the rest is in results.csv)"
-    return None
-
-
-def flatten(table: dict, prefix: str = "") -> dict:
-    """{'peg': {'width': 1}} -> {'peg.width': 1} (TOML turns unquoted dotted keys into sub-tables)."""
-    flat = {}
-    for key, value in table.items():
-        if isinstance(value, dict):
-            flat.update(flatten(value, f"{prefix}{key}."))
-        else:
-            flat[prefix + key] = value
-    return flat
-
-
-def _check_lists(table, same_length: bool) -> str | None:
-    if not isinstance(table, dict):
-        return "must be a table of key = [values]"
-    lists = flatten(table)
-    bad = [key for key, values in lists.items() if not isinstance(values, list) or not values]
-    if bad:
-        return f"{bad[0]} must be a non-empty list of values"
-    if same_length and len({len(values) for values in lists.values()}) > 1:
-        return "zipped lists must have one length: " + ", ".join(f"{k} has {len(v)}" for k, v in lists.items())
-    return None
-
-
-def _check_launcher(launcher: str) -> str | None:
-    """A complaint about a launcher command, or None: it must format with {ranks} alone and name a program."""
-    import shutil
-
-    try:
-        words = shlex.split(launcher.format(ranks=1))
-    except (KeyError, IndexError, ValueError) as error:
-        return f"cannot be read ({type(error).__name__}: {error}); the only placeholder is {{ranks}}"
-    if words and shutil.which(words[0]) is None:
-        return f"{words[0]!r}: no such program"
-    return None
-
-
-@dataclass
-class Case:
-    """One case of a study: its swept parameters, resolved scene and directory."""
-    params: dict
-    scene: dict
-    id: str
-    dir: Path
-    prefix: "Case | None" = None  # the shared-prefix computation it restarts from
-
-    @property
-    def is_prefix(self) -> bool:
-        """A shared prefix (results/NAME/prefix/ID), not a case of the study."""
-        return self.dir.parent.name == "prefix"
-
-
-@dataclass
-class Study:
-    """A loaded study: settings, cases (in sweep order), swept keys and result paths."""
-    path: Path
-    settings: dict
-    cases: list[Case]
-    keys: list[str]
-    results: Path
-    plots: list = field(default_factory=list)
-    snapshots: dict = field(default_factory=dict)
-    report: dict = field(default_factory=dict)
-    base: dict = field(default_factory=dict)  # the base scene with the study's and --set values, unresolved
-    sweep: dict = field(default_factory=dict)
-    count: int = 0  # parameter sets of the sweep (cases before duplicates are merged)
-    animation: dict = field(default_factory=dict)
-
-    @property
-    def database(self) -> Path:
-        return self.results / "results.sqlite"
-
-
-def get_key(scene: dict, dotted: str):
-    """scene['a'][1]['b'] for 'a.1.b'; None when absent."""
-    node = scene
-    for part in dotted.split("."):
-        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
-            node = node[int(part)]
-        elif isinstance(node, dict) and part in node:
-            node = node[part]
-        else:
-            return None
-    return node
-
-
-def expand(sweep: dict) -> Iterator[dict]:
-    """Parameter sets of a sweep, one at a time: grid (product) x zip (together), then the
-    explicit cases. An empty sweep is the base scene alone."""
-    grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
-    explicit = [flatten(case) for case in sweep.get("cases", [])]
-    if not grid and not zipped:
-        yield from explicit or [{}]
-        return
-    zip_sets = [dict(zip(zipped, values)) for values in zip(*zipped.values())] or [{}]
-    for values in itertools.product(*grid.values()):
-        for z in zip_sets:
-            yield {**dict(zip(grid, values)), **z}
-    yield from explicit
-
-
-def count_cases(sweep: dict) -> int:
-    """How many parameter sets `expand(sweep)` yields, without making them."""
-    grid, zipped = flatten(sweep.get("grid", {})), flatten(sweep.get("zip", {}))
-    explicit = len(sweep.get("cases", []))
-    if not grid and not zipped:
-        return explicit or 1
-    return math.prod(len(values) for values in grid.values()) * \
-        (len(next(iter(zipped.values()))) if zipped else 1) + explicit
-
-
-def swept_keys(sweep: dict) -> list[str]:
-    """The dotted scene keys a sweep sets, in the order of its parameter sets."""
-    explicit = [key for case in sweep.get("cases", []) for key in flatten(case)]
-    return list(dict.fromkeys([*flatten(sweep.get("grid", {})), *flatten(sweep.get("zip", {})), *explicit]))
-
-
-def load_study(path, overrides=(), results_root="results", max_cases=None, resolve_cases=True) -> Study:
-    """Read and validate a study file and resolve every case; raises InputError naming bad cases.
-
-    A sweep of more than `max_cases` cases (None: no limit) is refused before any is made. With
-    `resolve_cases` false the cases are left to `iter_cases` (one at a time, e.g. for --list)."""
-    path = Path(path)
-    try:
-        raw = validate(read_toml(path), SCHEMA)
-    except InputError as error:
-        raise InputError(f"{path}: {error}") from None
-    settings = raw["study"]
-    base = read_toml(path.parent / settings["scene"])
-    for key, value in flatten(raw["scene"]).items():
-        set_key(base, key, value)
-    apply_overrides(base, overrides)  # --set changes the base scene; the sweep still varies its own keys
-    count = count_cases(raw["sweep"])
-    if max_cases is not None and count > max_cases:
-        raise InputError(f"{path}: the sweep makes {count} cases, more than the limit of {max_cases}; nothing was "
-                         f"run (pass --max-cases {count} to run them all, or --list to see them)")
-    results = Path(results_root) / settings["name"]
-    study = Study(path, settings, [], swept_keys(raw["sweep"]), results, raw["plot"], raw["snapshots"],
-                  raw["report"], base=base, sweep=raw["sweep"], count=count, animation=raw["animation"])
-    _check_scene_once(study)
-    if resolve_cases:
-        make_cases(study)
-    return study
-
-
-def make_cases(study: Study) -> None:
-    """Resolve every case of the study into `study.cases`, with their shared prefixes."""
-    study.cases = list(iter_cases(study))
-    if study.settings["shared_steps"]:
-        attach_prefixes(study.cases, study.settings["shared_steps"], study.results)
-
-
-def _check_scene_once(study: Study) -> None:
-    """Refuse in one line a base scene that is invalid whatever the sweep sets: its error names
-    no swept key and the first case fails with the same error."""
-    try:
-        resolve(study.base)
-        return
-    except InputError as error:
-        message = str(error)
-    forms = {form for key in study.keys for form in (key, re.sub(r"\.(\d+)", r"[\1]", key))}
-    if any(form in message for form in forms):
-        return  # the sweep may mend it; each case says
-    try:
-        resolve(_case_data(study.base, next(expand(study.sweep))))
-    except InputError as error:
-        if str(error) == message:
-            raise InputError(f"{study.path}: {study.count} invalid case(s), nothing was run: {message} (the scene "
-                             f"{study.settings['scene']} with the study's values, whatever the sweep sets)") from None
-
-
-def _case_data(base: dict, params: dict) -> dict:
-    data = json.loads(json.dumps(base))
-    for key, value in params.items():
-        set_key(data, key, value)
-    return data
-
-
-def iter_cases(study: Study) -> Iterator[Case]:
-    """The study's distinct cases in sweep order, resolved one at a time; once all are made,
-    raises InputError listing the invalid ones, grouped by error."""
-    problems, seen = {}, set()
-    for params in expand(study.sweep):
-        try:
-            scene = resolve(_case_data(study.base, params))
-            if any(key.endswith("_type") for key in scene.get("solver", {}).get("petsc_options", {})):
-                from femcontact.solver.linear import check_petsc_options  # PETSc is imported only for these
-
-                check_petsc_options(scene["solver"]["petsc_options"])
-            if "outputs" in scene and any(matches(scene, flatten(t)) for t in study.animation["select"]):
-                scene["outputs"].update(fields=True, every=study.animation["every"])  # filmed in the report
-        except InputError as error:
-            problems.setdefault(str(error), []).append(params)
-            continue
-        identity = case_id(scene)
-        if identity not in seen:
-            seen.add(identity)
-            yield Case({key: get_key(scene, key) for key in study.keys}, scene, identity,
-                       study.results / "cases" / identity)
-    if problems:
-        invalid = sum(map(len, problems.values()))
-        lines = [f"case {_describe(cases[0])}: {message}" if len(cases) == 1 else
-                 f"{message} ({'every case' if len(cases) == study.count else f'{len(cases)} cases'}: "
-                 + "; ".join(_describe(params) for params in cases[:3]) + ("; ..." if len(cases) > 3 else "") + ")"
-                 for message, cases in problems.items()]
-        raise InputError(f"{study.path}: {invalid} invalid case(s), nothing was run:\n  " + "\n  ".join(lines))
-
-
-def matches(scene: dict, selector: dict) -> bool:
-    """Does the scene have every dotted key of `selector` at its value (numbers to 1e-9)?"""
-    def same(a, b):
-        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-            return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)
-        return a == b
-
-    return all(same(get_key(scene, key), value) for key, value in selector.items())
-
-
-def attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
-    """Give every case with more than `shared` steps the prefix case it restarts from."""
-    prefixes = {}
-    for case in cases:
-        if len(case.scene["steps"]) <= shared:
-            continue
-        scene = {**case.scene, "steps": case.scene["steps"][:shared]}
-        scene.pop("dislodging", None)  # read only after the shared steps
-        if "outputs" in scene:  # a filmed case shares its prefix with the others: the prefix writes no time series
-            scene["outputs"] = {**scene["outputs"], "fields": False, "every": 1}
-        identity = case_id(scene)
-        if identity not in prefixes:
-            prefixes[identity] = Case({}, scene, identity, results / "prefix" / identity)
-        case.prefix = prefixes[identity]
-
-
-def _describe(params: dict) -> str:
-    return ", ".join(f"{key}={value!r}" for key, value in params.items()) or "(base scene)"
-
-
-# -- the case directory ---------------------------------------------------------------------------
-
-def status_counts(results) -> dict:
-    """{status: number of results} over STATUSES (results without a result file are not counted)."""
-    counts = dict.fromkeys(STATUSES, 0)
-    for result in results:
-        if result is not None:
-            counts[result["status"] if result["status"] in counts else "failed"] += 1
-    return counts
-
-
-def read_result(case_dir: Path) -> dict | None:
-    """The case's result, or None when it has none (not run, or interrupted)."""
-    try:
-        return json.loads((case_dir / "result.json").read_text())
-    except (FileNotFoundError, json.JSONDecodeError):
-        return None
-
-
-def to_toml(scene: dict) -> str:
-    """TOML text of a resolved scene: scalars, then [tables], then [[arrays of tables]]."""
-    lines = [f"{_key(k)} = {_value(v)}" for k, v in scene.items() if not _is_table(v) and not _is_tables(v)]
-    for key, value in scene.items():
-        if _is_table(value):
-            lines += ["", f"[{_key(key)}]"] + _table_lines(value)
-    for key, value in scene.items():
-        if _is_tables(value):
-            for item in value:
-                lines += ["", f"[[{_key(key)}]]"] + _table_lines(item)
-    return "\n".join(lines) + "\n"
-
-
-def _is_table(value) -> bool:
-    return isinstance(value, dict) and bool(value)
-
-
-def _is_tables(value) -> bool:
-    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
-
-
-def _table_lines(table: dict, prefix: str = "") -> list[str]:
-    lines = []
-    for key, value in table.items():
-        if _is_table(value):
-            lines += _table_lines(value, f"{prefix}{_key(key)}.")
-        else:
-            lines.append(f"{prefix}{_key(key)} = {_value(value)}")
-    return lines
-
-
-def _key(key: str) -> str:
-    return key if key and all(c.isalnum() or c in "_-" for c in key) else json.dumps(key)
-
-
-def _value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)):
-        return repr(value)
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(map(_value, value)) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + "}"
-    raise TypeError(f"cannot write {value!r} as TOML")
 
 
 def provenance() -> dict:
@@ -572,14 +178,14 @@ class Runner:
             if code is None:
                 if elapsed > limit and not job.killed:
                     job.killed = f"time limit of {limit:g} s exceeded"
-                    _signal_group(job.process, signal.SIGTERM)
+                    signal_group(job.process, signal.SIGTERM)
                 elif job.killed and elapsed > limit + 5:
-                    _signal_group(job.process, signal.SIGKILL)
+                    signal_group(job.process, signal.SIGKILL)
                 continue
             self.running.remove(job)
             result = read_result(job.case.dir) if not job.killed else None
             if result is None:  # killed, crashed or exited without a result: the runner records why
-                reason = job.killed or _exit_reason(code, job.case.dir / "log.txt")
+                reason = job.killed or exit_reason(code, job.case.dir / "log.txt")
                 result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {},
                           "info": {"ranks": self.ranks}}
                 write_json_atomic(job.case.dir / "result.json", result)
@@ -591,13 +197,13 @@ class Runner:
     def stop_all(self) -> None:
         """Terminate every running job (their results stay missing, so they rerun next time)."""
         for job in self.running:
-            _signal_group(job.process, signal.SIGTERM)
+            signal_group(job.process, signal.SIGTERM)
         deadline = time.monotonic() + 5
         for job in self.running:
             try:
                 job.process.wait(max(0.0, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
-                _signal_group(job.process, signal.SIGKILL)
+                signal_group(job.process, signal.SIGKILL)
                 job.process.wait()
         self.running.clear()
         self.close_workers()
@@ -667,7 +273,7 @@ def prefix_outcome(prefix_id: str, prefix: dict) -> dict:
             "metrics": {}, "timings": {}, "info": {}}
 
 
-def _signal_group(process: subprocess.Popen, sig: int) -> None:
+def signal_group(process: subprocess.Popen, sig: int) -> None:
     try:
         os.killpg(process.pid, sig)
     except ProcessLookupError:
@@ -693,7 +299,7 @@ def _is_rule(line: str) -> bool:
     return len(line) >= 3 and not line.strip("-=*")
 
 
-def _exit_reason(code: int, log: Path) -> str:
+def exit_reason(code: int, log: Path) -> str:
     """Why a case ended without a result: the exit status and the log's own error, i.e. its last
     line, or for a message framed in banner lines (an MPI launcher's) the framed text."""
     how = f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
@@ -707,59 +313,3 @@ def _exit_reason(code: int, log: Path) -> str:
         if framed:
             return f"{how} without a result; launcher: {' '.join(framed)[:300]}"
     return f"{how} without a result" + (f"; last log line: {lines[-1][:300]}" if lines else "")
-
-
-# -- progress -------------------------------------------------------------------------------------
-
-class Progress:
-    """On a terminal a progress bar (and a line per failure), otherwise a line per finished case;
-    nothing with --quiet."""
-
-    def __init__(self, total: int, quiet: bool, stream=sys.stderr):
-        self.total, self.quiet, self.stream = total, quiet, stream
-        self.bar = not quiet and stream.isatty()
-        self.done = self.failed = 0
-        self.start = time.monotonic()
-        self.drawn = 0.0
-
-    def finished(self, case: Case, result: dict, prefix: bool = False) -> None:
-        if not prefix:
-            self.done += 1
-            self.failed += result["status"] == "failed"
-        if self.quiet or (self.bar and result["status"] == "ok"):
-            return
-        what = f"prefix {case.id}" if prefix else f"{case.id} {_describe(case.params)}"
-        line = f"[{self.done}/{self.total}] {result['status']:6s} {what}"
-        if result["status"] != "ok":
-            line += f": {result['reason']}"
-        self._clear()
-        print(line, file=self.stream, flush=True)
-        self.drawn = 0.0
-
-    def update(self, running: list[Job]) -> None:
-        now = time.monotonic()
-        if not self.bar or now - self.drawn < 0.2:
-            return
-        self.drawn = now
-        elapsed = now - self.start
-        eta = f"{_duration(elapsed / self.done * (self.total - self.done))}" if self.done else "?"
-        filled = int(30 * self.done / max(self.total, 1))
-        self.stream.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} done, "
-                          f"{self.failed} failed, {len(running)} running, {_duration(elapsed)} elapsed, "
-                          f"ETA {eta}\x1b[K")
-        self.stream.flush()
-
-    def close(self) -> None:
-        """Leave the terminal's last line free for the summary."""
-        self._clear()
-
-    def _clear(self) -> None:
-        if self.bar:
-            self.stream.write("\r\x1b[K")
-            self.stream.flush()
-
-
-def _duration(seconds: float) -> str:
-    seconds = int(seconds)
-    return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m" if seconds >= 3600 else \
-        f"{seconds // 60}m{seconds % 60:02d}s" if seconds >= 60 else f"{seconds}s"

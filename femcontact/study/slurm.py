@@ -27,12 +27,12 @@ import time
 from pathlib import Path
 
 from femcontact.errors import InputError
-from femcontact.io import make_dir, write_text_atomic
+from femcontact.io import make_dir, read_result, write_text_atomic
 from femcontact.io import write_json_atomic as _write_json
 from femcontact.outputs.result import ANSWERS, STATUSES
-from femcontact.study.runner import (Case, Study, _describe, _exit_reason, _signal_group, case_command,
-                                     prefix_outcome, provenance, read_result, remove_unfinished_compilations,
-                                     take_slot, to_toml)
+from femcontact.study.runner import (case_command, exit_reason, prefix_outcome, provenance,
+                                     remove_unfinished_compilations, signal_group, take_slot)
+from femcontact.study.study_file import Case, Study, describe_params, to_toml
 
 ACTIVE = {"PENDING", "RUNNING", "CONFIGURING", "COMPLETING", "SUSPENDED", "REQUEUED", "REQUEUE_HOLD",
           "REQUEUE_FED", "RESIZING", "SIGNALING", "STAGE_OUT"}
@@ -252,7 +252,7 @@ def status(study: Study, stream=None, local: dict | None = None) -> dict:
             state = "missing"
         counts[state] += 1
         where = f"  [job {task['job']}_{task['index']}]" if task else ""
-        print(f"{case.id}  {state:7s}  {_describe(case.params)}{where}", file=stream)
+        print(f"{case.id}  {state:7s}  {describe_params(case.params)}{where}", file=stream)
     print(f"study {study.settings['name']}: {len(study.cases)} cases: {counts['ok']} done, {counts['no_equilibrium']} "
           f"without equilibrium, {counts['failed']} failed, "
           f"{counts['running']} running, {counts['queued']} queued, {counts['missing']} missing", file=stream)
@@ -308,25 +308,25 @@ def run_task(manifest_path: Path, index: int) -> int:
         elapsed = time.monotonic() - start
         if elapsed > limit and not killed:
             killed = f"time limit of {limit:g} s exceeded"
-            _signal_group(process, signal.SIGTERM)
+            signal_group(process, signal.SIGTERM)
         elif killed and elapsed > limit + 5:
-            _signal_group(process, signal.SIGKILL)
+            signal_group(process, signal.SIGKILL)
         time.sleep(0.05)
     result = read_result(case_dir) if not killed else None
     terminated = result is None and not killed and process.returncode in (-signal.SIGTERM, 128 + signal.SIGTERM)
     if stop or terminated:  # stopped from outside (scancel, the job's time limit): SLURM signals every process
-        _signal_group(process, signal.SIGTERM)
+        signal_group(process, signal.SIGTERM)
         try:
             process.wait(5)
         except subprocess.TimeoutExpired:
-            _signal_group(process, signal.SIGKILL)
+            signal_group(process, signal.SIGKILL)
         if read_result(case_dir) is None:
             print(f"case {task['id']}: stopped by SIGTERM; nothing recorded, it is submitted again", file=sys.stderr)
             return 143
         result = read_result(case_dir)
     signal.signal(signal.SIGTERM, previous)
     if result is None:
-        reason = killed or _exit_reason(process.returncode, case_dir / "log.txt")
+        reason = killed or exit_reason(process.returncode, case_dir / "log.txt")
         result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {}, "info": {"ranks": ranks}}
         _write_json(case_dir / "result.json", result)
     runner = json.loads((case_dir / "runner.json").read_text())

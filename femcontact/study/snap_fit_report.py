@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.config.scene import friction_coefficient
+from femcontact.config.schema import get_key
+from femcontact.outputs.tables import format_value
 
 
 def _figure():
@@ -30,8 +32,6 @@ def _figure():
 
 
 def _selected(row: dict, select: dict) -> bool:
-    from femcontact.study.runner import get_key
-
     return all(get_key(row["scene"], key) in (value if isinstance(value, list) else [value])
                for key, value in select.items())
 
@@ -155,7 +155,7 @@ def table(rows: list[dict], column) -> list[tuple]:
     body = []
     for r in cases:
         saving = (1 - column(r, "peak_insertion_force") / column(taper, "peak_insertion_force")) if taper else math.nan
-        body.append([_cell(v) for v in (
+        body.append([format_value(v) for v in (
             column(r, "name")[5:], column(r, "peg.nose"), column(r, "final_contact_force"),
             column(r, "peak_insertion_force"), column(r, "model_peak_insertion_force"),
             f"{-100 * saving:+.1f} %" if taper else "", column(r, "peak_withdrawal_force"),

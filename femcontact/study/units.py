@@ -5,6 +5,7 @@
 in s, and a name not listed here is shown as is. `PRIMARY` lists the headline metrics of
 each family of scenes, the default columns of a report (docs/studies.md, "Reports").
 """
+from femcontact.outputs.tables import format_value
 
 LABELS = {
     # scene keys
@@ -169,14 +170,3 @@ def value_label(name: str, value) -> str:
     text = format_value(value)
     return f"{quantity} = {text}" + (f" {unit}" if unit and text != "none" else "")
 
-
-def format_value(value) -> str:
-    """Numbers to 4 significant digits, lists as (a, b) (one item: a; none: 'none')."""
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    if isinstance(value, list):
-        inner = ", ".join(map(format_value, value))
-        return "none" if not value else inner if len(value) == 1 else f"({inner})"
-    return "" if value is None else str(value)

@@ -20,7 +20,7 @@ import pytest
 
 from femcontact.cli import main
 from femcontact.study.slurm import active_tasks, read_submissions
-from femcontact.study.runner import load_study
+from femcontact.study.study_file import load_study
 from block_scene import BLOCK_SCENE
 
 REPO = Path(__file__).resolve().parents[2]

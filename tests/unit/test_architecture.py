@@ -1,6 +1,7 @@
 """The layering rules of docs/architecture.md, checked on the source text.
 
 - geometry/ is the lowest layer: it imports nothing from femcontact;
+- the measurement programs (benchmarks/) import the library, never the other way;
 - no import cycles between modules (module-level and function-level imports alike);
 - the solver names no effect: effects reach it only through the problem's hooks;
 - the solver names no material constant and no body, and reads no scene key outside the two modules
@@ -22,7 +23,8 @@ def module_name(path: Path) -> str:
 
 
 def sources() -> dict[str, Path]:
-    return {module_name(p): p for package in ("femcontact", "geometry") for p in (ROOT / package).rglob("*.py")}
+    return {module_name(p): p for package in ("femcontact", "geometry", "benchmarks")
+            for p in (ROOT / package).rglob("*.py")}
 
 
 def imports(path: Path, modules: set[str]) -> set[str]:
@@ -55,6 +57,22 @@ def test_geometry_imports_nothing_from_femcontact():
     offenders = {name: sorted(m for m in deps if m.startswith("femcontact"))
                  for name, deps in graph().items() if name.startswith("geometry")}
     assert {k: v for k, v in offenders.items() if v} == {}
+
+
+def test_the_library_never_imports_a_measurement_program():
+    """Not by an import (at module level or inside a function) nor by a "benchmarks.MODULE" string
+    that a worker or `importlib` would import."""
+    offenders = {name: sorted(m for m in deps if m.startswith("benchmarks"))
+                 for name, deps in graph().items() if not name.startswith("benchmarks")}
+    named = {name: sorted(word for word in string_constants(path) if word.startswith("benchmarks."))
+             for name, path in sources().items() if not name.startswith("benchmarks")}
+    assert {k: v for k, v in {**offenders, **named}.items() if v} == {}
+
+
+def string_constants(path: Path) -> set[str]:
+    """The string constants of a module."""
+    return {node.value for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)}
 
 
 def test_no_import_cycles():

@@ -4,7 +4,7 @@ import json
 from pathlib import Path
 
 from femcontact.cli import main
-from femcontact.study.runner import load_study
+from femcontact.study.study_file import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -29,7 +29,7 @@ BASE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10, 
 ])
 def test_bad_scene_files_give_one_clear_message(tmp_path, change, message):
     from femcontact.config.schema import set_key
-    from femcontact.study.runner import to_toml
+    from femcontact.study.study_file import to_toml
 
     data = json.loads(json.dumps(BASE))
     for key, value in change.items():

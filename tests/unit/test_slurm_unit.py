@@ -21,7 +21,7 @@ from femcontact.cli import main
 from femcontact.errors import InputError
 from femcontact.study.slurm import (active_tasks, default_time, expand_indices, parse_time, read_submissions,
                               sbatch_script, select)
-from femcontact.study.runner import load_study
+from femcontact.study.study_file import load_study
 
 HERE = Path(__file__).parent
 SUPPORT = HERE.parent / "support"

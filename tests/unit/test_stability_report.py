@@ -1,5 +1,5 @@
 """`make stability`'s report: converged cases far slower than their neighbours are named."""
-from femcontact.scenarios.stability import slow_cases
+from benchmarks.stability import check, slow_cases, study_report
 
 
 def case(resolution: float, seconds: float, status: str = "ok"):
@@ -14,3 +14,37 @@ def test_a_case_slower_than_three_times_its_neighbours_is_named():
     assert found[0][2] == 40.0 / 11.0  # the median of a, b and c
     # a case far from every other resolution has no neighbours, and a failed case is not timed
     assert "coarse" not in {cid for cid, _, _ in found}
+
+
+def answered(status: str, reason: str = "", **metrics):
+    return {"status": status, "reason": reason, "metrics": metrics, "timings": {"total": 1.0}, "info": {}}
+
+
+def test_a_load_without_static_equilibrium_is_an_answer_not_a_defect():
+    no_equilibrium = answered("no_equilibrium", "step 'load': the push needs mu >= 0.067; the solver found none either",
+                              friction_needed=0.067)
+    assert check(no_equilibrium) is None
+    assert check(answered("no_equilibrium")) == "no_equilibrium without a reason"
+    assert check(answered("no_equilibrium", "needs mu >= 0.1", tilt=float("nan"))) == "non-finite metrics: tilt"
+    assert check(answered("failed", "SimulationFailed: step load at t = 0.5 after 4 cuts; residual history [1.0]")) is None
+    assert check(answered("failed", "ValueError: x")) == "unstructured failure: ValueError: x"
+    assert check(None) == "no result"
+
+
+def test_the_report_counts_ok_no_equilibrium_and_failed_apart():
+    scene = {"mesh": {"resolution": 1.0}, "contact": {"mu": 0.0}}
+    results = {"a": (scene, answered("ok")), "b": (scene, answered("ok")),
+               "c": (scene, answered("no_equilibrium", "needs mu >= 0.067")),
+               "d": (scene, answered("failed", "SimulationFailed: step load; residual history [1.0]")),
+               "e": (scene, None)}
+    lines, defects = study_report("sweep", results, dict.fromkeys(results))
+    assert lines[0] == ("## sweep: 3 of 5 answered (60 %): 2 ok, 1 without a static equilibrium, 1 failed, "
+                        "1 without a result; 1 defects (NaN, traceback, unstructured failure, no result)")
+    assert defects == 1  # the case without a result
+    assert "| c | no_equilibrium | 0 | - | needs mu >= 0.067 |" in lines
+    # split by the rigid two-point statics: where mu is below what the load needs, no_equilibrium is the answer
+    lines, _ = study_report("sweep", results, {**dict.fromkeys(results), "c": 0.067, "d": 0.0})
+    assert ("- 1 cases with a rigid two-point equilibrium (mu >= the friction it needs): 0 ok, 0 without a static "
+            "equilibrium, 1 failed") in lines
+    assert ("- 1 cases without one (the rigid peg slides: mu < the friction it needs): 0 ok, 1 without a static "
+            "equilibrium, 0 failed") in lines

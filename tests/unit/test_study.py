@@ -25,7 +25,7 @@ from femcontact.study.database import Database
 from femcontact.errors import InputError
 from femcontact.config.scene import case_id, resolve
 from femcontact.config.schema import set_key
-from femcontact.study.runner import count_cases, expand, load_study, to_toml
+from femcontact.study.study_file import count_cases, expand, load_study, to_toml
 from block_scene import BLOCK_SCENE
 
 HERE = Path(__file__).parent
@@ -244,7 +244,7 @@ def test_shared_prefix_runs_once_and_variants_restart_from_it(tmp_path, fake):
 
 def test_a_filmed_case_shares_the_prefix_of_the_others(tmp_path):
     """Output settings (a time series for the report's film) do not change the shared steps' physics."""
-    from femcontact.study.runner import load_study
+    from femcontact.study.study_file import load_study
 
     path = make_study(tmp_path, '[sweep]\ngrid = { "steps.1.force" = [[1.0, 0.0], [2.0, 0.0]] }\n'
                       '[animation]\nselect = [ { "steps.1.force" = [2.0, 0.0] } ]', settings="shared_steps = 1")
@@ -430,13 +430,13 @@ def test_a_large_sweep_is_counted_first_refused_past_the_limit_and_made_lazily(t
     assert time.perf_counter() - start < 5  # refused before the cases are made (making them: ~1 min)
     assert not results.exists() and fake() == {}
     # the cases are made one at a time: the first arrive after as many resolutions, not 100000
-    import femcontact.study.runner as runner
+    import femcontact.study.study_file as study_file
 
     resolved = []
-    monkeypatch.setattr(runner, "resolve", lambda data: resolved.append(1) or resolve(data))
+    monkeypatch.setattr(study_file, "resolve", lambda data: resolved.append(1) or resolve(data))
     study = load_study(path, results_root=results, resolve_cases=False)
     assert study.count == 100000 and study.cases == []
-    cases = runner.iter_cases(study)
+    cases = study_file.iter_cases(study)
     first = [next(cases) for _ in range(3)]
     assert [case.params["mesh.resolution"] for case in first] == [0.1, 0.11, 0.12] and len(resolved) <= 5
     monkeypatch.undo()

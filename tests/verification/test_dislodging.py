@@ -315,7 +315,7 @@ def test_a_filmed_case_writes_its_weakest_dislodging_pull_and_the_report_plays_i
     import meshio
 
     from femcontact.cli import main
-    from femcontact.study.runner import load_study
+    from femcontact.study.study_file import load_study
 
     study = tmp_path / "film.toml"
     study.write_text(f'[study]\nname = "film"\nscene = "{Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml"}"\n'

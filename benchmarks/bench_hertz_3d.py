@@ -11,7 +11,7 @@ to reach and stay within 1 % of a and of p0 as the ratio femcontact (2 ranks) / 
 and cold, all measured in this run, and the machine's load average beside it. Writes
 results/bench/hertz_3d.md and hertz_3d.json.
 
-    python -m femcontact.scenarios.bench_hertz_3d [--levels N]
+    python -m benchmarks.bench_hertz_3d [--levels N]
 """
 import argparse
 import json
@@ -19,9 +19,11 @@ import os
 import sys
 import tempfile
 
+from femcontact.outputs.tables import markdown_table
 from femcontact.references.hertz import analytic_sphere, benchmark_radius_3d, BENCHMARK_3D
 from femcontact.scenarios import hertz
-from femcontact.scenarios.bench import GETFEM_DRIVER, OUT, _run, getfem_available, time_within
+
+from benchmarks.bench import GETFEM_DRIVER, OUT, _run, getfem_available, time_within
 
 LEVELS = 2
 """Finest level run by default: L2 (h_c = a/8.5; P2 about 75k dofs, GetFEM's 1 % of p0 on
@@ -115,14 +117,12 @@ def markdown(measured: dict) -> str:
              f"process. Load average during the runs {min(loads):.1f}-{max(loads):.1f} on this machine.", ""]
     if measured["getfem_skipped"]:
         lines += [f"GetFEM column skipped: {measured['getfem_skipped']}.", ""]
-    lines += ["| code | L | a/h_c | dofs | Newton per increment | error a | error p0 | warm (s) | cold (s) | solve (s) |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['code']} | {r['level']} | {r['a_over_h']} | {r['dofs']} | {r['newton_per_increment']} | "
-                     f"{100 * r['error_a']:+.2f} % | {100 * r['error_p0']:+.2f} % | {r['wall_time']:.1f} | "
-                     f"{r['cold_time']:.1f} | {r['solve_time']:.1f} |")
-    lines += ["", "| goal | measured | ratio to goal | holds |", "|---|---|---|---|"]
-    lines += ["| " + " | ".join(goal) + " |" for goal in goals(measured)]
+    lines += markdown_table(
+        ["code", "L", "a/h_c", "dofs", "Newton per increment", "error a", "error p0", "warm (s)", "cold (s)", "solve (s)"],
+        [[r["code"], r["level"], r["a_over_h"], r["dofs"], str(r["newton_per_increment"]), 100 * r["error_a"],
+          100 * r["error_p0"], r["wall_time"], r["cold_time"], r["solve_time"]] for r in rows],
+        formats=[None] * 5 + ["{:+.2f} %"] * 2 + ["{:.1f}"] * 3)
+    lines += ["", *markdown_table(["goal", "measured", "ratio to goal", "holds"], goals(measured))]
     return "\n".join(lines) + "\n"
 
 

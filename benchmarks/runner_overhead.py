@@ -11,7 +11,7 @@ A one-case study before them compiles the forms, so neither sweep pays for JIT c
 - overhead = (sweep wall time - sum of case times) / sum of case times. A fresh process's
   `timings.total` also holds the imports its solve needs (DOLFINx, gmsh), listed apart.
 
-`python -m femcontact.scenarios.runner_overhead` runs this alone; `make bench` includes it.
+`python -m benchmarks.runner_overhead` runs this alone; `make bench` includes it.
 """
 import json
 import os
@@ -20,7 +20,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-SCENE = Path(__file__).resolve().parents[2] / "scenes" / "wedging_2d.toml"
+from femcontact.outputs.tables import markdown_table
+
+SCENE = Path(__file__).resolve().parents[1] / "scenes" / "wedging_2d.toml"
 MU = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45)
 OVERRIDES = '[scene]\nmesh.resolution = 0.3\n"steps.0.increments" = 2\n"steps.1.increments" = 2\n'
 
@@ -72,19 +74,18 @@ def measure(root: Path = Path("results/bench/runner")) -> dict:
 
 
 def markdown(modes: dict) -> str:
+    rows = [[label, m["processes"], m["sweep_wall"], m["case_time"], m["imports_in_case"], m["overhead_per_case"],
+             100 * m["overhead"], m["later_per_case"], 100 * m["later"]]
+            for label, m in (("fresh `mpirun -n 1` per case", modes["fresh"]), ("warm worker", modes["warm"]))]
     lines = ["## Study runner overhead per one-rank case (1 job)", "",
              f"{modes['fresh']['cases']} 2-D wedging cases (632 dofs, 4 increments); case time = `femcontact run`'s "
              "timer in a warm worker; overhead = (sweep wall - sum of case times) / sum of case times; "
              "'later cases': from the end of the first case (the warm worker starts with the first).", "",
-             "| mode | processes | sweep wall (s) | sum of case times (s) | imports inside the case (s/case) | "
-             "overhead (s/case) | overhead | later cases: overhead (s/case) | later cases: overhead |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for mode, label in (("fresh", "fresh `mpirun -n 1` per case"), ("warm", "warm worker")):
-        m = modes[mode]
-        lines.append(f"| {label} | {m['processes']} | {m['sweep_wall']:.2f} | {m['case_time']:.2f} | "
-                     f"{m['imports_in_case']:.2f} | {m['overhead_per_case']:.3f} | {100 * m['overhead']:.1f} % | "
-                     f"{m['later_per_case']:.3f} | {100 * m['later']:.1f} % |")
-    lines += ["", f"Overhead per case, fresh / warm: {modes['ratio']:.1f}x."]
+             *markdown_table(["mode", "processes", "sweep wall (s)", "sum of case times (s)",
+                              "imports inside the case (s/case)", "overhead (s/case)", "overhead",
+                              "later cases: overhead (s/case)", "later cases: overhead"], rows,
+                             formats=[None, None, "{:.2f}", "{:.2f}", "{:.2f}", "{:.3f}", "{:.1f} %", "{:.3f}", "{:.1f} %"]),
+             "", f"Overhead per case, fresh / warm: {modes['ratio']:.1f}x."]
     return "\n".join(lines) + "\n"
 
 

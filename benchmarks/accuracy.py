@@ -33,9 +33,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from femcontact.config.presets import PRESETS
-from femcontact.scenarios.processes import run_scene
+from femcontact.outputs.tables import markdown_table
+from femcontact.references.richardson import richardson
 
-ROOT = Path(__file__).resolve().parents[2]
+from benchmarks.whole_process import run_scene
+
+ROOT = Path(__file__).resolve().parents[1]
 PRESET_NAMES = ("fast", "balanced", "accurate")
 OUT = Path("results/accuracy")
 
@@ -94,15 +97,6 @@ def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) 
             "residual_force_A": metrics["residual_force_A"], "tilt_released_deg": metrics["tilt_released_deg"]}
 
 
-def richardson(values: list[float], ratio: float) -> tuple[float, float]:
-    """Extrapolated limit and observed order from three values on meshes refined by `ratio`."""
-    f1, f2, f3 = values
-    order = math.log(abs((f1 - f2) / (f2 - f3))) / math.log(ratio) if f2 != f3 and f1 != f2 else float("nan")
-    if not math.isfinite(order) or order <= 0:
-        return f3, order
-    return f3 + (f3 - f2) / (ratio ** order - 1), order
-
-
 def wedging_rows() -> tuple[list[dict], list[str]]:
     wedging_case(0.35, "warm-up", "")
     resolutions = (0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8)
@@ -157,9 +151,9 @@ class Problem:
 
 
 PROBLEMS = {
-    "hertz": Problem("femcontact.scenarios.accuracy:hertz_rows", ("error_a", "error_p0"),
+    "hertz": Problem("benchmarks.accuracy:hertz_rows", ("error_a", "error_p0"),
                      (("error_a", "Hertz: contact half-width a"), ("error_p0", "Hertz: peak pressure p0"))),
-    "wedging_2d": Problem("femcontact.scenarios.accuracy:wedging_rows",
+    "wedging_2d": Problem("benchmarks.accuracy:wedging_rows",
                           ("error_residual_force_A", "error_tilt_released_deg"),
                           (("error_residual_force_A", "2-D wedging: residual force R_A after release"),)),
     "dislodging": Problem("femcontact.scenarios.dislodging:accuracy_rows",
@@ -170,7 +164,7 @@ PROBLEMS = {
                         ("error_peak_insertion_force", "error_insertion_force_ratio"),
                         (("error_peak_insertion_force", "Snap fit (2-D): peak insertion force"),
                          ("error_insertion_force_ratio", "Snap fit (2-D): insertion force ratio against statics"))),
-    "wedging_3d": Problem("femcontact.scenarios.accuracy:wedging_3d_rows", ("error_resultant",),
+    "wedging_3d": Problem("benchmarks.accuracy:wedging_3d_rows", ("error_resultant",),
                           (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
     "insertion": Problem("femcontact.scenarios.insertion:accuracy_rows", ("error_peak_force", "error_two_point_onset"),
                          (("error_peak_force", "2-D insertion: in-hole peak insertion force"),
@@ -225,17 +219,17 @@ def markdown(results: dict) -> str:
              "forms + solve + measurement of the case).", ""]
     for name, (rows, notes) in results.items():
         errors = PROBLEMS[name].errors
-        lines += [f"## {name}", "", "| knob | setting | dofs | Newton its | wall time (s) | "
-                  + " | ".join(errors) + " |", "|---|---|---|---|---|" + "---|" * len(errors)]
-        for r in rows:
-            lines.append(f"| {r['knob']} | {r['setting']} | {r.get('dofs', '')} | {r.get('newton_iterations', '')} | "
-                         f"{r['wall_time']:.2f} | " + " | ".join(f"{100 * r[e]:.3f} %" for e in errors) + " |")
+        lines += [f"## {name}", "", *markdown_table(
+            ["knob", "setting", "dofs", "Newton its", "wall time (s)", *errors],
+            [[r["knob"], r["setting"], r.get("dofs", ""), r.get("newton_iterations", ""), r["wall_time"],
+              *(100 * r[e] for e in errors)] for r in rows],
+            formats=[None] * 4 + ["{:.2f}"] + ["{:.3f} %"] * len(errors))]
         lines += ["", *notes, ""]
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m femcontact.scenarios.accuracy", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.accuracy", description=__doc__.splitlines()[0])
     parser.add_argument("--problems", default=",".join(n for n, p in PROBLEMS.items() if p.default),
                         help=f"comma-separated problems to measure, from {', '.join(PROBLEMS)} (default: %(default)s)")
     parser.add_argument("--with-3d", action="store_true", help="also the 3-D wedging case on 2 ranks")

@@ -31,13 +31,17 @@ from pathlib import Path
 from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_half_width
-from femcontact.scenarios import hertz, runner_overhead
-from femcontact.scenarios.processes import run_scene
+from femcontact.scenarios import hertz
 from femcontact.config.scene import resolve
+from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 
+from benchmarks import runner_overhead
+from benchmarks.whole_process import run_scene
+
 OUT = Path("results/bench")
-GETFEM_DRIVER = Path(__file__).resolve().parents[2] / "benchmarks" / "getfem_hertz.py"
+ROOT = Path(__file__).resolve().parents[1]
+GETFEM_DRIVER = Path(__file__).with_name("getfem_hertz.py")
 HERTZ_LEVELS = 4
 """Finest Hertz level L (h_c = a/(2^(L+1) + 0.5)): a/32.5."""
 HERTZ_REPEATS = 5
@@ -158,7 +162,7 @@ def wedging_case(overrides: list[str] = ()) -> dict:
     status."""
     from femcontact.config.scene import load_scene
 
-    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "wedging_2d.toml", list(overrides))
+    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", list(overrides))
     if not overrides:
         Simulation(scene, MPI.COMM_SELF).run()  # compile the forms outside the measurement
     with counting({"residual": 0, "direction": 0}) as counts:
@@ -197,7 +201,7 @@ def _worst(case: dict) -> int:
 def wedging_3d(ranks: int = 2) -> dict:
     """The 3-D wedging case on `ranks` ranks, `mpirun ... femcontact run` as whole processes, per
     `solver.contact_update` (True: the default): wall time (s), Newton iterations, status."""
-    scene = Path(__file__).resolve().parents[2] / "scenes" / "wedging_3d.toml"
+    scene = ROOT / "scenes" / "wedging_3d.toml"
     out = {}
     for update in (False, True):
         case = (OUT / f"wedging_3d_{ranks}_ranks_update_{update}").resolve()
@@ -326,46 +330,40 @@ def markdown(hertz_rows, effects_rows, codes=(), skipped="", wedging=None, wedgi
     lines = ["# femcontact benchmark", "", "Wall times measured in one run on a shared machine (other jobs running): "
              "compare them as ratios within this run.", ""]
     if wedging is not None:
-        lines += ["## Goals, measured in this run", "", "| goal | measured | ratio to goal | holds |",
-                  "|---|---|---|---|"]
-        lines += ["| " + " | ".join(row) + " |" for row in goals(list(codes), skipped, wedging, wedging3d, overhead,
-                                                                  variants)]
+        lines += ["## Goals, measured in this run", "",
+                  *markdown_table(["goal", "measured", "ratio to goal", "holds"],
+                                  goals(list(codes), skipped, wedging, wedging3d, overhead, variants))]
         lines += ["", f"Default 2-D wedging case ({wedging['dofs']} dofs), warm: Newton per increment "
                   + ", ".join(f"{step} {values}" for step, values in wedging["newton"].items())
                   + f"; wall time {wedging['wall_time']:.2f} s ("
                   + ", ".join(f"{k} {v:.2f}" for k, v in wedging["timings"].items()) + ")", ""]
     if variants:
         lines += ["## 2-D wedging variants (warm, 1 rank)", "",
-                  "| overrides of scenes/wedging_2d.toml | Newton per increment | assemblies / directions | "
-                  "wall time (s) | status |", "|---|---|---|---|---|"]
-        for r in variants:
-            lines.append(f"| {' '.join(r['overrides'])} | " + "; ".join(f"{step} {values}" for step, values in
-                                                                        r["newton"].items())
-                         + f" | {r['residual_assemblies']} / {r['newton_directions']} | {r['wall_time']:.2f} | "
-                         f"{r['status']} |")
-        lines.append("")
+                  *markdown_table(["overrides of scenes/wedging_2d.toml", "Newton per increment",
+                                   "assemblies / directions", "wall time (s)", "status"],
+                                  [[" ".join(r["overrides"]), "; ".join(f"{step} {values}" for step, values in
+                                                                        r["newton"].items()),
+                                    f"{r['residual_assemblies']} / {r['newton_directions']}", r["wall_time"], r["status"]]
+                                   for r in variants], formats=[None, None, None, "{:.2f}", None]), ""]
     lines += ["## Hertz: femcontact and GetFEM on the same protocol (whole processes, 1 rank)", "",
               f"Wall time: the fastest of {HERTZ_REPEATS} processes per code and level, each from its start to its end.", ""]
     if skipped:
         lines += [f"GetFEM column skipped: {skipped}.", ""]
-    lines += ["| code | L | a/h_c | dofs | Newton per increment | error a | error p0 | wall time (s) | solve (s) |",
-              "|---|---|---|---|---|---|---|---|---|"]
-    for r in codes:
-        lines.append(f"| {r['code']} | {r['level']} | {r['a_over_h']} | {r['dofs']} | {r['newton_per_increment']} | "
-                     f"{100 * r['error_a']:+.3f} % | {100 * r['error_p0']:+.3f} % | {r['wall_time']:.2f} | "
-                     f"{r['solve_time']:.2f} |")
-    lines += ["", "## Hertz: femcontact P1 accuracy against wall time, per phase (in-process, forms compiled, 1 rank)", "",
-             "| a/h_c | dofs | error a | error p0 | Newton its | wall time (s) | mesh | forms | solve |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for r in hertz_rows:
-        lines.append(f"| {r['a_over_h']} | {r['dofs']} | {100 * r['error_a']:+.2f} % | {100 * r['error_p0']:+.2f} % | "
-                     f"{r['newton_iterations']} | {r['wall_time']:.2f} | {r['time_mesh']:.2f} | "
-                     f"{r['time_forms']:.2f} | {r['time_solve']:.2f} |")
-    lines += ["", "## 2-D cost per load increment and per effect (1 rank)", "",
-              "| scene | dofs | Newton its / increment | s / increment | ratio |", "|---|---|---|---|---|"]
-    for r in effects_rows:
-        lines.append(f"| {r['scene']} | {r['dofs']} | {r['newton_per_increment']:.1f} | "
-                     f"{r['seconds_per_increment']:.3f} | {r['ratio']:.2f} |")
+    lines += markdown_table(
+        ["code", "L", "a/h_c", "dofs", "Newton per increment", "error a", "error p0", "wall time (s)", "solve (s)"],
+        [[r["code"], r["level"], r["a_over_h"], r["dofs"], str(r["newton_per_increment"]), 100 * r["error_a"],
+          100 * r["error_p0"], r["wall_time"], r["solve_time"]] for r in codes],
+        formats=[None] * 5 + ["{:+.3f} %"] * 2 + ["{:.2f}"] * 2)
+    lines += ["", "## Hertz: femcontact P1 accuracy against wall time, per phase (in-process, forms compiled, 1 rank)", ""]
+    lines += markdown_table(
+        ["a/h_c", "dofs", "error a", "error p0", "Newton its", "wall time (s)", "mesh", "forms", "solve"],
+        [[r["a_over_h"], r["dofs"], 100 * r["error_a"], 100 * r["error_p0"], r["newton_iterations"], r["wall_time"],
+          r["time_mesh"], r["time_forms"], r["time_solve"]] for r in hertz_rows],
+        formats=[None, None, "{:+.2f} %", "{:+.2f} %", None] + ["{:.2f}"] * 4)
+    lines += ["", "## 2-D cost per load increment and per effect (1 rank)", ""]
+    lines += markdown_table(["scene", "dofs", "Newton its / increment", "s / increment", "ratio"],
+                            [[r["scene"], r["dofs"], r["newton_per_increment"], r["seconds_per_increment"], r["ratio"]]
+                             for r in effects_rows], formats=[None, None, "{:.1f}", "{:.3f}", "{:.2f}"])
     return "\n".join(lines) + "\n"
 
 

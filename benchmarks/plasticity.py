@@ -15,7 +15,7 @@ holds the peg, and does an edge radius make the peak stress a property of the pa
 
 Writes results/plasticity/plasticity.md, plasticity.json and plasticity.png.
 
-    python -m femcontact.scenarios.plasticity
+    python -m benchmarks.plasticity
 """
 import json
 import time
@@ -25,12 +25,14 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from femcontact.config.scene import load_scene, resolve
-from femcontact.scenarios import bench
+from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 from geometry.measures import cell_coordinates
 
+from benchmarks import bench
+
 OUT = Path("results/plasticity")
-SCENE = Path(__file__).resolve().parents[2] / "scenes" / "wedging_2d.toml"
+SCENE = Path(__file__).resolve().parents[1] / "scenes" / "wedging_2d.toml"
 ELASTIC, PLASTIC = ["friction", "plane_strain"], ["friction", "plane_strain", "plasticity"]
 THESIS_316 = "plasticity.hardening=[[0, 210], [1, 290]]"
 CONTACT_SIZES = (0.02, 0.01, 0.005, 0.0025)
@@ -106,27 +108,30 @@ def cost_rows() -> list[dict]:
 
 def page(wedging: list[dict], edges: list[dict], costs: list[dict], seconds: float) -> str:
     lines = ["# Plasticity: wedging on stainless 316, edge radius, cost", "",
-             f"`make plasticity` (python -m femcontact.scenarios.plasticity), {seconds:.0f} s. "
+             f"`make plasticity` (python -m benchmarks.plasticity), {seconds:.0f} s. "
              "See docs/plasticity.md.", "",
              "## Wedging at the thesis depths (push Fx = -5, Fy = 1 N, then release)", "",
-             "| l_d | resolution | R_A elastic (N) | R_A plastic (N) | change | peak von Mises elastic / plastic (MPa) "
-             "| max PEEQ | plastic zone (mm^2) |", "|---|---|---|---|---|---|---|---|"]
-    for r in wedging:
-        lines.append(f"| {r['l_d']:g} | {r['resolution']:g} | {r['R_A_elastic']:.4f} | {r['R_A_plastic']:.4f} | "
-                     f"{100 * r['R_A_change']:+.2f} % | {r['peak_von_mises_elastic']:.0f} / {r['peak_von_mises_plastic']:.0f} | "
-                     f"{r['max_peeq']:.2e} | {r['plastic_zone']:.2e} |")
-    lines += ["", "## Peak stress under a rounded peg corner (corner_radius 1 mm, push only)", "",
-              "| contact size (mm) | cells | peak von Mises B, rounded (MPa) | peak von Mises A, sharp (MPa) "
-              "| plastic: peak B / A (MPa) | max PEEQ | plastic zone (mm^2) |", "|---|---|---|---|---|---|---|"]
-    for r in edges:
-        lines.append(f"| {r['contact_size']:g} | {r['cells']} | {r['peak_B_elastic']:.0f} | {r['peak_A_elastic']:.0f} | "
-                     f"{r['peak_B_plastic']:.0f} / {r['peak_A_plastic']:.0f} | {r['max_peeq']:.2e} | {r['plastic_zone']:.2e} |")
-    lines += ["", "## Cost per increment (warm, fastest of 3, one core)", "",
-              "| scene | dofs | elastic s / increment (Newton) | plastic s / increment (Newton) | ratio |", "|---|---|---|---|---|"]
-    for elastic, plastic in zip(costs[::2], costs[1::2]):
-        lines.append(f"| {elastic['scene']} | {elastic['dofs']} | {elastic['seconds_per_increment']:.3f} "
-                     f"({elastic['newton_per_increment']:.1f}) | {plastic['seconds_per_increment']:.3f} "
-                     f"({plastic['newton_per_increment']:.1f}) | {plastic['ratio']:.2f} |")
+             *markdown_table(["l_d", "resolution", "R_A elastic (N)", "R_A plastic (N)", "change",
+                              "peak von Mises elastic / plastic (MPa)", "max PEEQ", "plastic zone (mm^2)"],
+                             [[r["l_d"], r["resolution"], r["R_A_elastic"], r["R_A_plastic"], 100 * r["R_A_change"],
+                               f"{r['peak_von_mises_elastic']:.0f} / {r['peak_von_mises_plastic']:.0f}", r["max_peeq"],
+                               r["plastic_zone"]] for r in wedging],
+                             formats=["{:g}", "{:g}", "{:.4f}", "{:.4f}", "{:+.2f} %", None, "{:.2e}", "{:.2e}"]),
+             "", "## Peak stress under a rounded peg corner (corner_radius 1 mm, push only)", "",
+             *markdown_table(["contact size (mm)", "cells", "peak von Mises B, rounded (MPa)",
+                              "peak von Mises A, sharp (MPa)", "plastic: peak B / A (MPa)", "max PEEQ",
+                              "plastic zone (mm^2)"],
+                             [[r["contact_size"], r["cells"], r["peak_B_elastic"], r["peak_A_elastic"],
+                               f"{r['peak_B_plastic']:.0f} / {r['peak_A_plastic']:.0f}", r["max_peeq"], r["plastic_zone"]]
+                              for r in edges],
+                             formats=["{:g}", None, "{:.0f}", "{:.0f}", None, "{:.2e}", "{:.2e}"]),
+             "", "## Cost per increment (warm, fastest of 3, one core)", "",
+             *markdown_table(["scene", "dofs", "elastic s / increment (Newton)", "plastic s / increment (Newton)", "ratio"],
+                             [[elastic["scene"], elastic["dofs"],
+                               f"{elastic['seconds_per_increment']:.3f} ({elastic['newton_per_increment']:.1f})",
+                               f"{plastic['seconds_per_increment']:.3f} ({plastic['newton_per_increment']:.1f})",
+                               plastic["ratio"]] for elastic, plastic in zip(costs[::2], costs[1::2])],
+                             formats=[None] * 4 + ["{:.2f}"])]
     return "\n".join(lines) + "\n"
 
 
