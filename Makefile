@@ -150,4 +150,4 @@ dislodging_beyond_frequency: STUDY_FILE := studies/dislodging_beyond_frequency.t
 dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency: setup
 	@status=0; $(FEMCONTACT) study $(STUDY_FILE) $(STUDY_FLAGS) || status=$$?; \
 	  if [ $$status -gt 1 ]; then exit $$status; fi; \
-	  $(PY) -m femcontact.study.dislodging_beyond || exit $$?; exit $$status
+	  $(PY) -m femcontact.families.dislodging.methods_report || exit $$?; exit $$status

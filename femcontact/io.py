@@ -120,3 +120,11 @@ def remove_stale_compilations(directory: Path, older_than: float) -> None:
                 source.with_suffix(".c.cached").unlink(missing_ok=True)
         elif name.endswith(".c.cached") and name.removesuffix(".cached") not in names:
             source.unlink(missing_ok=True)
+
+
+def read_result(case_dir: Path) -> dict | None:
+    """A case's result.json, or None when it has none (not run, or interrupted)."""
+    try:
+        return json.loads((Path(case_dir) / "result.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        return None

@@ -71,7 +71,7 @@ def command(args) -> int:
     if args.ranks > 1 and not os.environ.get("FEMCONTACT_HERTZ_CHILD"):
         return relaunch(args)
     MPI = start_mpi_for_meshing()
-    from femcontact.scenarios import hertz
+    from femcontact.families.hertz import benchmark as hertz
     from femcontact.solver.stepping import Simulation
 
     comm = MPI.COMM_WORLD

@@ -20,7 +20,7 @@ import sys
 import tempfile
 
 from femcontact.references.hertz import analytic_sphere, benchmark_radius_3d, BENCHMARK_3D
-from femcontact.scenarios import hertz
+from femcontact.families.hertz import benchmark as hertz
 from femcontact.scenarios.bench import GETFEM_DRIVER, OUT, _run, getfem_available, time_within
 
 LEVELS = 2

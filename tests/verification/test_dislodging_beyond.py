@@ -1,13 +1,13 @@
 """The dislodging load kinds beyond a plain pull (lateral pulses, moment pulses, pull plus shake) against exact
-free-body solutions, and the pulse optimiser's verification step (femcontact.scenarios.dislodging_beyond)."""
+free-body solutions, and the pulse optimiser's verification step (femcontact.families.dislodging.methods)."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.errors import InputError
-from femcontact.scenarios.dislodging_beyond import apply_method, load_impulse, method_loads, peak_and_impulse
+from femcontact.families.dislodging.methods import apply_method, load_impulse, method_loads, peak_and_impulse
 
 SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dislodging_beyond_2d.toml"
 
@@ -92,11 +92,11 @@ def test_scene_keys_are_checked():
 def wedged(tmp_path_factory):
     """The coarse wedged peg (resolution 0.5, thesis case 1), its puller and the checkpoint of
     its wedged state and quasi-static pull-out, from which the verifying runs start afresh."""
-    from femcontact.scenarios.dislodging_beyond import BeyondPuller
+    from femcontact.families.dislodging.methods import MethodPuller
 
     checkpoint = tmp_path_factory.mktemp("wedged") / "checkpoint"
     scene = load_scene(SCENE, ["dislodging.task=optimise"])
-    return scene, BeyondPuller(scene, checkpoint=checkpoint), checkpoint
+    return scene, MethodPuller(scene, checkpoint=checkpoint), checkpoint
 
 
 def test_optimum_is_verified_by_a_fresh_simulation(wedged):
@@ -104,7 +104,7 @@ def test_optimum_is_verified_by_a_fresh_simulation(wedged):
     pulls each): the best pulse dislodges, and a fresh simulation (new solver, state read from
     the checkpoint) reproduces its impulse (the pulls are deterministic: only the solver's
     tolerance differs, 1e-6 allowed)."""
-    from femcontact.scenarios.dislodging_beyond import optimise, verify
+    from femcontact.families.dislodging.pulse_optimisation import optimise, verify
 
     scene, puller, checkpoint = wedged
     puller.settings.update(grid_hz=[50.0], grid_duty=[1.0], evaluations=2)
@@ -124,7 +124,7 @@ def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
     force that holds it statically; repeated square pulses at P itself do ratchet it out in
     make dislodging_beyond_frequency), the optimum is the least of them, and a fresh simulation
     from the checkpoint dislodges at the optimal peak and not one bracket below it."""
-    from femcontact.scenarios.dislodging_beyond import optimise_peak, verify_peak
+    from femcontact.families.dislodging.pulse_optimisation import optimise_peak, verify_peak
 
     scene, puller, checkpoint = wedged
     puller.settings.update(peak_shapes=["square"], peak_evaluations=3, tolerance=0.1)
@@ -141,7 +141,7 @@ def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
 def test_torque_across_the_peg_axis_is_against_the_wedging_moment():
     """3-D twist across the axis: the unit axis perpendicular to the peg's, opposite to the
     wedging moment (My = -1000 N*mm tilts the peg further: the unwedging torque is +y)."""
-    from femcontact.scenarios.dislodging_beyond import across_axis
+    from femcontact.families.dislodging.pullout_3d import across_axis
 
     tilt = np.radians(1.4)
     axis = np.array([-np.sin(tilt), 0.0, np.cos(tilt)])  # top leaning to -x, in the x-z plane
@@ -156,12 +156,12 @@ def test_3d_probes_stream_to_csv_and_resume(tmp_path):
     """The 3-D wedged cylinder on its coarse mesh (resolution 0.3, 1 rank): a small torque
     across the axis against the wedging moment is held (elastic, both contacts loaded), four
     times the friction torque mu (N_A + N_B) d / 2 is not; each probe is in probes_3d.csv
-    as soon as it is solved, and a new Wedge3D on the same file answers from it without solving."""
-    from femcontact.scenarios.dislodging_beyond import PROBES_FILE, Wedge3D
+    as soon as it is solved, and a new WedgedPeg3D on the same file answers from it without solving."""
+    from femcontact.families.dislodging.pullout_3d import PROBES_FILE, WedgedPeg3D
 
     scene = load_scene(SCENE.with_name("dislodging_beyond_3d.toml"), ["mesh.resolution=0.3"])
     probes = tmp_path / PROBES_FILE
-    wedge = Wedge3D(scene, probes=probes)
+    wedge = WedgedPeg3D(scene, probes=probes)
     c = wedge.contacts
     friction_torque = scene["contact"]["mu"] * (c["N_A"] + c["N_B"]) * scene["peg"]["width"] / 2
     assert wedge.holds(0.05 * friction_torque, "twist_across")
@@ -173,7 +173,7 @@ def test_3d_probes_stream_to_csv_and_resume(tmp_path):
     assert [(r["method"], r["holds"]) for r in rows] == [("twist_across", "True"), ("twist_across", "False")]
     assert float(rows[0]["moved_mm"]) < scene["dislodging"]["lift"] and float(rows[0]["zone_A_N"]) > 0
 
-    class Resumed(Wedge3D):
+    class Resumed(WedgedPeg3D):
         def probe(self, magnitude, method):
             raise AssertionError("solved again")
 

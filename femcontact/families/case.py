@@ -1,33 +1,17 @@
 """Run one case of any family and collect its metrics: what `femcontact run` calls.
 
-A contact scene runs through the solver (history streamed to `history.csv`, progress on
-standard error), then its family adds its own metrics (`FAMILY_METRICS`, by geometry);
-an RCC scene is evaluated by the truss model.
+A scene of a family's own kind runs by the family's `run_case` (e.g. the RCC truss, a dislodging
+search); a contact scene runs through the solver (history streamed to `history.csv`, progress on
+standard error), stepped by its family's `run_steps` if it has one, then its family adds its own
+metrics. The family comes from the registry (femcontact.families).
 """
 import math
 import time
 from pathlib import Path
 
-from femcontact.errors import InputError
+from femcontact import families
 from femcontact.config.scene import friction_coefficient
-
-
-def family_metrics(simulation) -> dict:
-    """The study family's metrics of a finished contact simulation (none for a plain block):
-    a peg on a compliant support is an insertion, any other peg in a hole a wedging case."""
-    if "compliant_support" in simulation.scene["effects"]:
-        from femcontact.scenarios.insertion import insertion_metrics
-
-        return insertion_metrics(simulation)
-    if simulation.scene["geometry"] == "peg_in_hole":
-        from femcontact.scenarios.wedging import wedge_metrics
-
-        return wedge_metrics(simulation)
-    if simulation.scene["geometry"] == "snap_fit":
-        from femcontact.scenarios.snap_fit import snap_fit_metrics
-
-        return snap_fit_metrics(simulation)
-    return {}
+from femcontact.errors import InputError
 
 
 def summary_metrics(simulation) -> dict:
@@ -143,16 +127,15 @@ class RunOn:
 
 def outcome_metrics(simulation, verdict: dict) -> dict:
     """Metrics of a run that ended without a static equilibrium: the converged increments' summary,
-    where the load lost its equilibrium, and for a peg in a hole the wedging answer (not wedged)."""
+    where the load lost its equilibrium, and the family's answer to it (a wedging case: not wedged)."""
     metrics = summary_metrics(simulation) if simulation.history else {"newton_iterations": 0, "increments": 0}
     metrics.update({"no_equilibrium_step": verdict["step"], "no_equilibrium_time": verdict["time"],
                     "friction_needed": verdict["friction_needed"], "mu": verdict["mu"]})
     if "run_on" in verdict:
         metrics.update(run_on=verdict["run_on"], run_on_time=verdict["run_on_time"])
-    if simulation.scene["geometry"] == "peg_in_hole":
-        from femcontact.scenarios.wedging import analytic_metrics
-
-        metrics.update(wedged=False, wedge_reason="no static equilibrium under load", **analytic_metrics(simulation.scene))
+    family = families.family_of(simulation.scene)
+    if family and family.outcome_metrics:
+        metrics.update(family.outcome_metrics(simulation.scene))
     return metrics
 
 
@@ -174,17 +157,15 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     case_dir, rank = Path(case_dir), MPI.COMM_WORLD.rank
     history = HistoryWriter(case_dir / "history.csv", rank)
     listeners = [history] + ([] if quiet else [Progress(scene, rank=rank)])
-    verdict, series = None, None
+    verdict, series, family = None, None, families.family_of(scene)
     try:
         simulation = Simulation(scene, listeners=listeners)
         first_step = simulation.load_checkpoint(restart) if restart else 0
         if scene["outputs"]["fields"]:  # frames from here on: a restart's series begins at its checkpoint
             series = FieldSeries(simulation, case_dir)
             simulation.listeners.append(series)
-        if scene["geometry"] == "snap_fit":  # a jam ends the run as an outcome, not a failure
-            from femcontact.scenarios.snap_fit import run as run_snap_fit
-
-            run_snap_fit(simulation, first_step)
+        if family and family.run_steps:  # e.g. a snap fit's jam ends the run as an outcome, not a failure
+            family.run_steps(simulation, first_step)
         else:
             run_on = RunOn(simulation)
             if "inertia" in scene["effects"]:
@@ -209,7 +190,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     write_fields(simulation, case_dir)
     simulation.timings["output"] += time.perf_counter() - start
     if verdict is None:
-        metrics = {**summary_metrics(simulation), **family_metrics(simulation)}
+        metrics = {**summary_metrics(simulation), **(family.metrics(simulation) if family and family.metrics else {})}
     else:
         metrics = {**outcome_metrics(simulation, verdict), "wall_time_s": float(sum(simulation.timings.values()))}
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
@@ -222,16 +203,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None, quiet: bool = True) -> dict:
     """Run a resolved scene of any kind; returns {'metrics', 'timings', 'info'} (and 'status' and
     'reason' for an outcome other than ok) or raises SimulationFailed."""
-    if scene["kind"] == "rcc":
-        from femcontact.rcc.device import run_case as run_rcc
-
-        return run_rcc(scene)
-    if scene["kind"] == "dislodging_beyond":
-        from femcontact.scenarios.dislodging_beyond import run_case as run_beyond
-
-        return run_beyond(scene, case_dir, checkpoint, restart)
-    if scene["kind"] == "dislodging":
-        from femcontact.scenarios.dislodging import run_case as run_dislodging
-
-        return run_dislodging(scene, case_dir, checkpoint, restart)
+    family = families.family_of(scene)
+    if family and family.run_case:
+        return family.run_case(scene, case_dir, checkpoint, restart)
     return run_contact(scene, case_dir, checkpoint, restart, quiet)

@@ -97,6 +97,12 @@ def analytic_metrics(scene: dict) -> dict:
     return out
 
 
+def no_equilibrium_metrics(scene: dict) -> dict:
+    """The wedging answer of a run whose load has no static equilibrium: not wedged, and the
+    analytic bounds of its scene."""
+    return {"wedged": False, "wedge_reason": "no static equilibrium under load", **analytic_metrics(scene)}
+
+
 def push_friction_needed(scene: dict) -> float | None:
     """The least mu with which a rigid peg at the two-point placement holds the first step's load
     (`references.two_point_statics`); None for a load point the placement does not name (the

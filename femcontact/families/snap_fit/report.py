@@ -1,4 +1,4 @@
-"""Snap-fit plot kinds of `femcontact report` (registered in femcontact.study.report.write_plot):
+"""Snap-fit plot kinds of `femcontact report` (the snap_fit family's `plots`) and its summary table:
 
 - `force_curves`: a list metric against another (insertion_force against insertion_depth, or
   the withdrawal pair) for the cases `select` picks, one curve per case labelled by `series`,
@@ -29,11 +29,8 @@ def _figure():
     return plt
 
 
-def _selected(row: dict, select: dict) -> bool:
-    from femcontact.study.runner import get_key
-
-    return all(get_key(row["scene"], key) in (value if isinstance(value, list) else [value])
-               for key, value in select.items())
+def _selected(row: dict, select: dict, column) -> bool:
+    return all(column(row, key) in (value if isinstance(value, list) else [value]) for key, value in select.items())
 
 
 def model_curve(scene: dict, depth, withdrawal: bool = False) -> np.ndarray:
@@ -63,7 +60,7 @@ def write_force_curves(spec: dict, rows: list[dict], results: Path, column) -> P
     figure, axes = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
     withdrawal = spec["y"].startswith("withdrawal")
     ends = []  # where each curve settles to its value on the shank
-    for index, row in enumerate(r for r in rows if r["status"] == "ok" and _selected(r, spec["select"])):
+    for index, row in enumerate(r for r in rows if r["status"] == "ok" and _selected(r, spec["select"], column)):
         depth, force = column(row, spec["x"]), column(row, spec["y"])
         if not isinstance(depth, list) or not isinstance(force, list):
             continue
@@ -95,7 +92,7 @@ def _save(plt, figure, axes, results: Path, spec: dict, default_name: str, legen
 def write_sweep(spec: dict, rows: list[dict], results: Path, column) -> Path:
     plt = _figure()
     figure, axes = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
-    chosen = sorted((column(r, spec["x"]), r) for r in rows if r["status"] == "ok" and _selected(r, spec["select"]))
+    chosen = sorted((column(r, spec["x"]), r) for r in rows if r["status"] == "ok" and _selected(r, spec["select"], column))
     x = [c[0] for c in chosen]
     axes.plot(x, [column(r, spec["y"]) for _, r in chosen], "o-", label=f"FE: {spec['y']}")
     model = [column(r, f"model_{spec['y']}") for _, r in chosen]
@@ -113,7 +110,7 @@ def write_jam_map(spec: dict, rows: list[dict], results: Path, column) -> Path:
     figure, axes = plt.subplots(figsize=(6.4, 5.4), layout="constrained")
     marks = {True: ("x", "tab:red", "FE: jammed"), False: ("o", "tab:green", "FE: slides")}
     seen, couples = set(), []
-    rows = [r for r in rows if _selected(r, spec["select"])]
+    rows = [r for r in rows if _selected(r, spec["select"], column)]
     for row in rows:
         x, y = column(row, spec["x"]), column(row, spec["y"])
         if row["status"] != "ok":

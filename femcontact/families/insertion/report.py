@@ -1,4 +1,4 @@
-"""Plot kinds of the compliant-insertion study (Whitney ch. 10; femcontact.scenarios.insertion).
+"""Plot kinds of the compliant-insertion study (Whitney ch. 10; `metrics.py`).
 
 - `insertion_history`: one panel per ok case, the FE force `y` (Fz, Fx or M) against the depth s
   with the FE phases shaded, the analytic tier's curve dashed on the same axes, and both
@@ -26,14 +26,9 @@ def _float(value):
         return value
 
 
-def _flag(row: dict, name: str) -> bool:
-    value = row.get(name, row.get(f"metric.{name}"))
-    return value in (1, True, "1", "True", "true")
-
-
 def case_curves(row: dict, results: Path):
     """(FE curve, analytic curve or None) of an ok insertion case, or None without its history."""
-    from femcontact.scenarios.insertion import analytic_curve, force_history
+    from femcontact.families.insertion.metrics import analytic_curve, force_history
 
     path = results / "cases" / row["case_id"] / "history.csv"
     scene = row["scene"]
@@ -57,9 +52,9 @@ def _file(spec: dict, default: str) -> str:
     return spec["file"] or re.sub(r"[^\w.-]+", "_", default) + ".png"
 
 
-def write_insertion_history(spec: dict, rows: list[dict], results: Path) -> Path:
+def write_insertion_history(spec: dict, rows: list[dict], results: Path, column) -> Path:
     import matplotlib.pyplot as plt
-    from femcontact.scenarios.insertion import two_point_onset
+    from femcontact.families.insertion.metrics import two_point_onset
 
     quantity = spec["y"] if spec["y"] in ("Fz", "Fx", "M") else "Fz"
     cases = [(row, c) for row in rows if (c := case_curves(row, results)) is not None]
@@ -82,7 +77,7 @@ def write_insertion_history(spec: dict, rows: list[dict], results: Path) -> Path
             panel.plot(analytic["depth"], analytic[quantity], "--", color="tab:blue", lw=1.2, label=f"analytic {quantity}")
             if analytic["two_point_onset"] is not None:
                 panel.axvline(analytic["two_point_onset"], color="tab:blue", ls=":", lw=1, label="analytic onset")
-        if _flag(row, "jammed"):
+        if bool(column(row, "jammed")):
             panel.text(0.02, 0.9, "FE: jammed", transform=panel.transAxes, color="tab:red")
         panel.set_title(_label(row["scene"]), fontsize=7)
         panel.set_xlabel("depth s below the chamfer's lower edge (mm)")
@@ -105,7 +100,7 @@ def write_insertion_history(spec: dict, rows: list[dict], results: Path) -> Path
     return path
 
 
-def write_jamming_diagram(spec: dict, rows: list[dict], results: Path) -> Path:
+def write_jamming_diagram(spec: dict, rows: list[dict], results: Path, column) -> Path:
     import matplotlib.pyplot as plt
     from matplotlib import cm, colors
     from femcontact.references import whitney
@@ -132,7 +127,7 @@ def write_jamming_diagram(spec: dict, rows: list[dict], results: Path) -> Path:
             y = np.array([curve["M"][i] / (r * curve["Fz"][i]) for i in states])
             lam = np.array([curve["l"][i] / (mu * d) for i in states])
             panel.scatter(x, y, c=lam, cmap=colour, norm=norm, s=10)
-            is_jammed = _flag(row, "jammed")
+            is_jammed = bool(column(row, "jammed"))
             counts[is_jammed] += 1
             panel.plot(x[-1], y[-1], "x" if is_jammed else "o", color="tab:red", markersize=10,
                        markerfacecolor="none", linestyle="none")
@@ -151,7 +146,7 @@ def write_jamming_diagram(spec: dict, rows: list[dict], results: Path) -> Path:
     return path
 
 
-def write_wedging_window(spec: dict, rows: list[dict], results: Path) -> Path:
+def write_wedging_window(spec: dict, rows: list[dict], results: Path, column) -> Path:
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(7, 5))
@@ -167,7 +162,7 @@ def write_wedging_window(spec: dict, rows: list[dict], results: Path) -> Path:
         scene = row["scene"]
         c = (scene["hole"]["width"] - scene["peg"]["width"]) / scene["hole"]["width"]
         points.append((c, abs(math.radians(curve["theta"][first])), scene["contact"]["mu"],
-                       _flag(row, "wedged")))
+                       bool(column(row, "wedged"))))
     cs = np.linspace(1e-4, max([p[0] for p in points] + [0.01]) * 1.3, 200)
     axes.plot(cs, np.sqrt(2 * cs), "k-", label="theta_m = sqrt(2c): largest entering tilt")
     for mu in sorted({p[2] for p in points}) or [0.1]:
@@ -188,7 +183,3 @@ def write_wedging_window(spec: dict, rows: list[dict], results: Path) -> Path:
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
-
-
-PLOTS = {"insertion_history": write_insertion_history, "jamming_diagram": write_jamming_diagram,
-         "wedging_window": write_wedging_window}

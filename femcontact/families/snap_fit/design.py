@@ -16,7 +16,7 @@ Two designs at the stroke of a flat taper:
   sample depths).
 
 Angles are capped at `MAX_ANGLE_DEG` so the nose stays clear of the model's jam condition.
-`python -m femcontact.scenarios.snap_fit_design [scene.toml]` prints both designs as
+`python -m femcontact.families.snap_fit.design [scene.toml]` prints both designs as
 `peg.nose_points` lines for a study file, with their predicted peak forces.
 """
 import math
@@ -129,8 +129,8 @@ def taper_stroke(scene: dict) -> float:
 
 
 def main(argv=None) -> int:
-    from femcontact.config.scene import load_scene
-    from femcontact.scenarios.snap_fit import reduced_model
+    from femcontact.families import load_scene
+    from femcontact.families.snap_fit.metrics import reduced_model
 
     argv = sys.argv[1:] if argv is None else argv
     scene = load_scene(argv[0] if argv else "scenes/snap_fit_2d.toml", argv[1:])

@@ -11,7 +11,6 @@ import math
 import time
 
 import numpy as np
-from mpi4py import MPI
 
 from femcontact.references.hertz import (BENCHMARK, BENCHMARK_3D, analytic, analytic_sphere, benchmark_half_width,
                                          benchmark_radius_3d)
@@ -23,11 +22,11 @@ QUARTER = 4
 def scene(contact_size: float, P: float = BENCHMARK["P"], gamma: float = 10.0, increments: int = 2) -> dict:
     """The benchmark scene with a uniform contact-zone element size (mm); a falls mid-element
     when a / contact_size is a whole number plus one half."""
-    from femcontact.config.scene import resolve
+    from femcontact.config.scene import resolve_contact
 
     b = BENCHMARK
     a = benchmark_half_width()
-    return resolve({
+    return resolve_contact({
         "name": "hertz", "dim": 2, "geometry": "block", "rigid": "indenter", "effects": ["plane_strain"],
         "block": {"width": b["width"], "height": b["height"]}, "indenter": {"shape": "cylinder", "radius": b["R"]},
         "materials": {"block": {"E": b["E"], "nu": b["nu"]}},
@@ -41,11 +40,11 @@ def scene(contact_size: float, P: float = BENCHMARK["P"], gamma: float = 10.0, i
 def scene_3d(contact_size: float, P: float = BENCHMARK_3D["P"], gamma: float = 10.0, increments: int = 2) -> dict:
     """The sphere benchmark's quarter model with a uniform element size `contact_size` (mm) on
     r <= 1.5 a; a falls mid-element when a / contact_size is a whole number plus one half."""
-    from femcontact.config.scene import resolve
+    from femcontact.config.scene import resolve_contact
 
     b = BENCHMARK_3D
     a = benchmark_radius_3d()
-    return resolve({
+    return resolve_contact({
         "name": "hertz_3d", "dim": 3, "geometry": "block", "rigid": "indenter",
         "block": {"width": b["width"], "depth": b["depth"], "height": b["height"], "symmetry": "quarter"},
         "indenter": {"shape": "sphere", "radius": b["R"]},
@@ -99,14 +98,16 @@ def surface_metrics(x, p) -> dict:
     return {"a": math.sqrt(-intercept / slope), "p0": float(p.max()), "contact_nodes": int(len(p))}
 
 
-def run(contact_size: float, comm=MPI.COMM_WORLD, dim: int = 2, **kwargs) -> dict:
-    """Run the benchmark (2-D or 3-D) at one mesh size; relative errors of a and p0 and the
-    phase timings."""
+def run(contact_size: float, comm=None, dim: int = 2, **kwargs) -> dict:
+    """Run the benchmark (2-D or 3-D) at one mesh size on `comm` (default: every rank); relative
+    errors of a and p0 and the phase timings."""
+    from mpi4py import MPI
+
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
     data = (scene if dim == 2 else scene_3d)(contact_size, **kwargs)
-    simulation = Simulation(data, comm)
+    simulation = Simulation(data, comm or MPI.COMM_WORLD)
     simulation.run()
     result = measure(simulation)
     result["wall_time"] = time.perf_counter() - start

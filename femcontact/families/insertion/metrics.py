@@ -309,13 +309,13 @@ def accuracy_case(label: str, knob: str, overrides=()) -> dict:
     """One run of scenes/insertion_2d.toml with `overrides`: the in-hole peak force (N), the
     two-point onset (mm) and the wall time (s: mesh, forms, solve and measurement)."""
     import time
-    from pathlib import Path
 
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
+    from femcontact.families.accuracy import ROOT
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
-    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml", list(overrides))
+    scene = load_scene(ROOT / "scenes" / "insertion_2d.toml", list(overrides))
     simulation = Simulation(scene)
     simulation.run()
     curve = force_history(scene, simulation.history)
@@ -331,7 +331,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     of the three finest resolutions, else the finest), against the number of load increments at
     resolution 1 and against Newton's rtol (errors against the finest setting of that knob). The
     scene's own setting (resolution 1, 52 increments, rtol 1e-9) is run once and shown in each knob."""
-    from femcontact.scenarios.accuracy import richardson
+    from femcontact.families.accuracy import richardson
 
     accuracy_case("warm-up", "", ["mesh.resolution=0.5", "steps.0.increments=3", "steps.0.support_motion.y=-1.2"])
     mesh = [accuracy_case(f"resolution {r:g}", "mesh (P1)", [f"mesh.resolution={r}"]) for r in ACCURACY_RESOLUTIONS]

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from femcontact.rcc import device as rcc
+from femcontact.families.rcc import device as rcc
 from femcontact.errors import InputError
 
 

@@ -2,8 +2,8 @@
 
 `label(name)` gives e.g. "depth l_d (mm)" for `peg.insertion_depth`; a step-end metric
 `STEP.QUANTITY` is labelled from its quantity ("tilt (deg), end of release"), `time.PHASE`
-in s, and a name not listed here is shown as is. `PRIMARY` lists the headline metrics of
-each family of scenes, the default columns of a report (docs/studies.md, "Reports").
+in s, and a name not listed here is shown as is. A family's headline metrics, the default
+columns of a report, are the family's own (femcontact.families, `primary_columns`).
 """
 
 LABELS = {
@@ -25,7 +25,7 @@ LABELS = {
     "rcc.offset_t": "base offset T (mm)",
     "motion.translation": "test translation (mm)",
     "motion.rotation": "test rotation (rad)",
-    # wedging metrics (femcontact.wedging)
+    # wedging metrics (femcontact.families.wedging)
     "wedged": "wedged (simulated)",
     "analytic_wedged": "wedged (l_crit <= l_d <= mu d)",
     "wedge_reason": "why (not) wedged",
@@ -66,7 +66,7 @@ LABELS = {
     "newton_iterations": "Newton iterations",
     "increments": "increments",
     "yielded": "yielded",
-    # dislodging metrics (femcontact.scenarios.dislodging)
+    # dislodging metrics (femcontact.families.dislodging)
     "threshold_force_N": "threshold pull (N)",
     "bracket_N": "threshold bracket (N)",
     "impulse_at_threshold_Ns": "impulse at the threshold (N s)",
@@ -88,7 +88,7 @@ LABELS = {
     "dislodging.task": "task",
     "optimum_objective_impulse_Ns": "least impulse found (N s)",
     "optimum_objective_peak_force_N": "least peak pull found (N)",
-    # insertion metrics (femcontact.scenarios.insertion): FE, then the analytic tier
+    # insertion metrics (femcontact.families.insertion): FE, then the analytic tier
     "two_point_onset": "two-point onset depth (mm)",
     "analytic_two_point_onset": "two-point onset, analytic (mm)",
     "peak_force": "peak insertion force (N)",
@@ -107,14 +107,14 @@ LABELS = {
     "support.model": "support",
     "materials.hole.E": "hole E (MPa)",
     "dim": "dimension",
-    # rcc metrics (femcontact.rcc)
+    # rcc metrics (femcontact.families.rcc)
     "max_rel_error": "largest relative error",
     "worst_dof": "worst dof",
     "motion_ratio": "translation / link length",
     "centre_z": "compliance centre z (mm)",
     "centre_z_moved": "compliance centre z, moved (mm)",
     **{f"error_{dof}": f"relative error {dof}" for dof in ("x", "y", "z", "rx", "ry", "rz")},
-    # runner columns (femcontact.database)
+    # runner columns (femcontact.study.database)
     "case_id": "case",
     "status": "status",
     "wall": "wall time (s)",
@@ -122,16 +122,6 @@ LABELS = {
     "ranks": "ranks",
     "reason": "reason",
 }
-
-# Headline metrics per family, picked by the first metric of the list a study's rows have.
-PRIMARY = {
-    "wedging": ["wedged", "analytic_wedged", "residual_force_A", "tilt_released_deg", "max_von_mises"],
-    "dislodging": ["threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "quasi_static_pullout_N",
-                   "degree_of_wedging"],
-    "rcc": ["max_rel_error", "worst_dof", "centre_z", "centre_z_moved"],
-    "contact": ["max_von_mises", "newton_iterations"],
-}
-
 
 def label(name: str) -> str:
     """Axis or column label of a scene key, metric or runner column, with its unit."""
@@ -145,15 +135,6 @@ def label(name: str) -> str:
     if step and quantity in LABELS and not step[0].isdigit():
         return f"{LABELS[quantity]}, end of {step}"
     return name
-
-
-def primary_metrics(columns) -> list[str]:
-    """The headline metrics of the first family whose first primary metric is among `columns`."""
-    columns = list(columns)
-    for metrics in PRIMARY.values():
-        if metrics[0] in columns:
-            return [m for m in metrics if m in columns]
-    return []
 
 
 # Metrics stored as 0/1 that mean no/yes.
@@ -180,3 +161,10 @@ def format_value(value) -> str:
         inner = ", ".join(map(format_value, value))
         return "none" if not value else inner if len(value) == 1 else f"({inner})"
     return "" if value is None else str(value)
+
+
+def cell(value, name: str = "") -> str:
+    """A table cell: yes/no for flags, numbers to 4 significant digits, lists as (a, b)."""
+    if name in FLAGS and value in (0, 1):
+        return "yes" if value else "no"
+    return format_value(value).replace("\n", " ")

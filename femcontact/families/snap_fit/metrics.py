@@ -36,18 +36,18 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
 """
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 
 from femcontact.references import snap_fit as reference
 from femcontact.config.scene import friction_coefficient
+from femcontact.families.accuracy import ROOT
 
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
 STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
-SCENE = Path(__file__).resolve().parents[2] / "scenes" / "snap_fit_2d.toml"
+SCENE = ROOT / "scenes" / "snap_fit_2d.toml"
 
 
 def _zones(scene: dict) -> list[str]:
@@ -250,7 +250,7 @@ def reduced_model(scene: dict) -> dict:
 def accuracy_case(knob: str, setting: str, overrides: list[str]) -> dict:
     """One run of scenes/snap_fit_2d.toml for `make accuracy`: wall time (s) of mesh, forms, solve
     and metrics, the peak insertion force (N) and the insertion force ratio against the statics."""
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
@@ -271,7 +271,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     resolution at the scene's 40 increments per step, and increments per step at resolution 1.
     Errors: the insertion force ratio against the statics tan(alpha + phi); the peak insertion
     force against a Richardson extrapolation of each knob's three finest settings (or the finest)."""
-    from femcontact.scenarios.accuracy import richardson
+    from femcontact.families.accuracy import richardson
 
     accuracy_case("", "warm-up", ["mesh.resolution=0.5"])
     resolutions, increments = (0.5, 0.7, 1.0, 1.4, 2.0), (10, 20, 40, 80, 160, 320)
