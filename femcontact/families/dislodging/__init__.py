@@ -31,7 +31,8 @@ def study_report(study) -> tuple[list, list[tuple]]:
 
 
 def _schema_sections() -> list[tuple[str, list[str], str]]:
-    return [("## Dislodging scene (kind = dislodging): the `[dislodging]` table", describe(scene.DISLODGING, "dislodging."),
+    return [("## Dislodging scene (kind = dislodging): the `[dislodging]` table",
+             describe(scene.DISLODGING, "dislodging."),
              "A 2-D peg-in-hole contact scene (the keys above) plus this table. Example: "
              "[`scenes/dislodging_2d.toml`](../scenes/dislodging_2d.toml); see [dislodging.md](dislodging.md)."),
             ("## Dislodging scene (kind = dislodging_methods): the `[dislodging]` table",
