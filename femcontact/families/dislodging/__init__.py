@@ -1,4 +1,4 @@
-"""Dislodging a wedged peg (docs/dislodging.md, docs/dislodging_beyond.md): scenes of kind
+"""Dislodging a wedged peg (docs/dislodging.md, docs/dislodging_methods.md): scenes of kind
 "dislodging" (the thesis' pulls and their thresholds: `pull.py`, its report `report.py`, its rows
 in `make accuracy` `accuracy.py`) and "dislodging_methods" (degree of wedging, shaking, twisting,
 pulse optimisation and the 3-D pull-out: `tasks.py`, `methods.py`, `pulse_optimisation.py`,
@@ -38,9 +38,9 @@ def _schema_sections() -> list[tuple[str, list[str], str]]:
             ("## Dislodging scene (kind = dislodging_methods): the `[dislodging]` table",
              describe(scene.METHODS_TABLE, "dislodging."),
              "A 2-D or 3-D peg-in-hole contact scene plus this table. Examples: "
-             "[`scenes/dislodging_beyond_2d.toml`](../scenes/dislodging_beyond_2d.toml), "
-             "[`scenes/dislodging_beyond_3d.toml`](../scenes/dislodging_beyond_3d.toml); "
-             "see [dislodging_beyond.md](dislodging_beyond.md).")]
+             "[`scenes/dislodging_methods_2d.toml`](../scenes/dislodging_methods_2d.toml), "
+             "[`scenes/dislodging_methods_3d.toml`](../scenes/dislodging_methods_3d.toml); "
+             "see [dislodging_methods.md](dislodging_methods.md).")]
 
 
 FAMILY = Family(

@@ -9,7 +9,7 @@ from femcontact.families import load_scene
 from femcontact.errors import InputError
 from femcontact.families.dislodging.methods import apply_method, load_impulse, method_loads, peak_and_impulse
 
-SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dislodging_beyond_2d.toml"
+SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dislodging_methods_2d.toml"
 
 
 def free_peg(pull_duration: float, observe_duration: float):
@@ -122,7 +122,7 @@ def test_peak_optimum_is_a_threshold_verified_by_a_fresh_simulation(wedged):
     to 0.1 N): no evaluation's threshold lies more than one bisection step (0.1 N) below the
     quasi-static pull-out P (a pulse does not get the wedged peg out with much less than the
     force that holds it statically; repeated square pulses at P itself do ratchet it out in
-    make dislodging_beyond_frequency), the optimum is the least of them, and a fresh simulation
+    make dislodging_methods_frequency), the optimum is the least of them, and a fresh simulation
     from the checkpoint dislodges at the optimal peak and not one bracket below it."""
     from femcontact.families.dislodging.pulse_optimisation import optimise_peak, verify_peak
 
@@ -159,7 +159,7 @@ def test_3d_probes_stream_to_csv_and_resume(tmp_path):
     as soon as it is solved, and a new WedgedPeg3D on the same file answers from it without solving."""
     from femcontact.families.dislodging.pullout_3d import PROBES_FILE, WedgedPeg3D
 
-    scene = load_scene(SCENE.with_name("dislodging_beyond_3d.toml"), ["mesh.resolution=0.3"])
+    scene = load_scene(SCENE.with_name("dislodging_methods_3d.toml"), ["mesh.resolution=0.3"])
     probes = tmp_path / PROBES_FILE
     wedge = WedgedPeg3D(scene, probes=probes)
     c = wedge.contacts
