@@ -20,7 +20,7 @@ FAMILIES = [hertz.FAMILY, wedging.FAMILY, insertion.FAMILY, snap_fit.FAMILY, dis
 CONTACT_PRIMARY = ("max_von_mises", "newton_iterations")
 """Headline metrics of a contact study no family's headline metrics match."""
 
-__all__ = ["Accuracy", "FAMILIES", "Family", "family_of", "load_scene", "plot_kind", "primary_columns",
+__all__ = ["Accuracy", "FAMILIES", "Family", "family_of", "load_scene", "plot_kind", "plot_kinds", "primary_columns",
            "resolve_scene", "study_family"]
 
 
