@@ -1,4 +1,4 @@
-"""Small helpers every report figure shares."""
+"""What every report figure shares: plain tick labels on a short log axis."""
 
 
 def plain_log_ticks(axes, spec: dict) -> None:
