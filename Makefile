@@ -24,10 +24,10 @@ export OPENBLAS_NUM_THREADS := 1
 export PYVISTA_OFF_SCREEN := true
 
 STUDY_FILES := $(wildcard studies/*.toml)
-STUDIES := $(filter-out dislodging_beyond_2d dislodging_beyond_3d dislodging_beyond_frequency,$(basename $(notdir $(STUDY_FILES))))
+STUDIES := $(filter-out dislodging_methods_2d dislodging_methods_3d dislodging_methods_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench bench_hertz_3d accuracy stability plasticity clean dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench bench_hertz_3d accuracy stability plasticity clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -141,13 +141,17 @@ stability: setup
 clean:
 	rm -rf results
 
-# Beyond the thesis' dislodging (lateral and moment pulses, pull plus shake): studies/dislodging_beyond_2d.toml, then
-# results/dislodging_beyond/; `make dislodging_beyond_3d` adds the 3-D thresholds (2 ranks),
-# `make dislodging_beyond_frequency` the ways out at 10 and 200 Hz and the peak-force optimum.
-dislodging_beyond: STUDY_FILE := studies/dislodging_beyond_2d.toml
-dislodging_beyond_3d: STUDY_FILE := studies/dislodging_beyond_3d.toml
-dislodging_beyond_frequency: STUDY_FILE := studies/dislodging_beyond_frequency.toml
-dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency: setup
+# Ways out of a wedge (degree of wedging, lateral and moment pulses, pull plus shake, the best pulse):
+# studies/dislodging_methods_2d.toml, then results/dislodging_methods/; `make dislodging_methods_3d` adds the 3-D
+# thresholds (2 ranks), `make dislodging_methods_frequency` the ways out at 10 and 200 Hz and the peak-force optimum.
+# `make dislodging_beyond`, `dislodging_beyond_3d` and `dislodging_beyond_frequency` are the same targets.
+dislodging_beyond: dislodging_methods
+dislodging_beyond_3d: dislodging_methods_3d
+dislodging_beyond_frequency: dislodging_methods_frequency
+dislodging_methods: STUDY_FILE := studies/dislodging_methods_2d.toml
+dislodging_methods_3d: STUDY_FILE := studies/dislodging_methods_3d.toml
+dislodging_methods_frequency: STUDY_FILE := studies/dislodging_methods_frequency.toml
+dislodging_methods dislodging_methods_3d dislodging_methods_frequency: setup
 	@status=0; $(FEMCONTACT) study $(STUDY_FILE) $(STUDY_FLAGS) || status=$$?; \
 	  if [ $$status -gt 1 ]; then exit $$status; fi; \
-	  $(PY) -m femcontact.study.dislodging_beyond || exit $$?; exit $$status
+	  $(PY) -m femcontact.families.dislodging.methods_report || exit $$?; exit $$status

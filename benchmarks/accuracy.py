@@ -11,15 +11,15 @@ beforehand so the JIT cache is warm):
   and the released tilt;
 - dislodging (scenes/dislodging_2d.toml, thesis case 1, 50 Hz pulses): threshold peak force,
   impulse at the threshold and at 1.05 x the pull-out against dt_max and mesh resolution
-  (`femcontact.scenarios.dislodging.accuracy_rows`);
+  (`femcontact.families.dislodging.accuracy`);
 - 3-D wedging (scenes/wedging_3d.toml, 2 ranks, `--with-3d`): resolution, against the finest;
 - the presets `accuracy = fast | balanced | accurate` on both 2-D problems;
-- 2-D insertion (scenes/insertion_2d.toml; rows from femcontact.scenarios.insertion): the in-hole
+- 2-D insertion (scenes/insertion_2d.toml; rows from femcontact.families.insertion.metrics): the in-hole
   peak insertion force and the two-point onset against resolution, load increments and rtol.
 
 Each problem is one entry of `PROBLEMS`: a function returning its rows (and notes), the
-error columns of its table and its Pareto plots. A study family adds its rows by adding
-an entry whose function lives in the family's own module. Writes
+error columns of its table and its Pareto plots (an `Accuracy`). A study family adds its rows
+by declaring its `accuracy` (femcontact.families), the function in the family's own package. Writes
 results/accuracy/accuracy.md, accuracy.json and one Pareto plot per problem (error
 against wall time, one marker per setting, the Pareto front joined).
 """
@@ -29,10 +29,10 @@ import json
 import math
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 from femcontact.config.presets import PRESETS
+from femcontact.families import FAMILIES, Accuracy
 from femcontact.outputs.tables import markdown_table
 from femcontact.references.richardson import richardson
 
@@ -45,7 +45,7 @@ OUT = Path("results/accuracy")
 
 def hertz_case(label: str, knob: str, contact_size: float, degree: int = 1, gamma: float = 10.0,
                rtol: float | None = None, resolution: float = 1.0) -> dict:
-    from femcontact.scenarios import hertz
+    from femcontact.families.hertz import benchmark as hertz
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
@@ -81,8 +81,8 @@ def hertz_rows() -> tuple[list[dict], list[str]]:
 
 def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) -> dict:
     """One wedging run; `resolution` None leaves the mesh to the scene (and its preset)."""
-    from femcontact.config.scene import load_scene
-    from femcontact.scenarios.wedging import wedge_metrics
+    from femcontact.families import load_scene
+    from femcontact.families.wedging.metrics import wedge_metrics
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
@@ -137,39 +137,17 @@ def wedging_3d_rows() -> tuple[list[dict], list[str]]:
     return rows, ["Reference for the resultant: the finest resolution, 0.75 (5 load increments)."]
 
 
-@dataclass(frozen=True)
-class Problem:
-    """One problem of the study: `rows` is "module:function" returning (rows, notes); each row
-    has `knob`, `setting`, `wall_time` (s) and the `errors` columns (relative errors)."""
-
-    rows: str
-    errors: tuple[str, ...]
-    plots: tuple[tuple[str, str], ...]
-    """(error column, plot title) per Pareto plot."""
-    default: bool = True
-    """Measured by a plain `make accuracy`; otherwise only when named with `--problems`."""
-
-
 PROBLEMS = {
-    "hertz": Problem("benchmarks.accuracy:hertz_rows", ("error_a", "error_p0"),
+    "hertz": Accuracy("benchmarks.accuracy:hertz_rows", ("error_a", "error_p0"),
                      (("error_a", "Hertz: contact half-width a"), ("error_p0", "Hertz: peak pressure p0"))),
-    "wedging_2d": Problem("benchmarks.accuracy:wedging_rows",
+    "wedging_2d": Accuracy("benchmarks.accuracy:wedging_rows",
                           ("error_residual_force_A", "error_tilt_released_deg"),
                           (("error_residual_force_A", "2-D wedging: residual force R_A after release"),)),
-    "dislodging": Problem("femcontact.scenarios.dislodging:accuracy_rows",
-                          ("error_threshold_N", "error_impulse_at_threshold_Ns", "error_impulse_fixed_Ns"),
-                          (("error_threshold_N", "Dislodging case 1, 50 Hz: threshold peak force"),
-                           ("error_impulse_fixed_Ns", "Dislodging case 1, 50 Hz: impulse at 1.05 x pull-out"))),
-    "snap_fit": Problem("femcontact.scenarios.snap_fit:accuracy_rows",
-                        ("error_peak_insertion_force", "error_insertion_force_ratio"),
-                        (("error_peak_insertion_force", "Snap fit (2-D): peak insertion force"),
-                         ("error_insertion_force_ratio", "Snap fit (2-D): insertion force ratio against statics"))),
-    "wedging_3d": Problem("benchmarks.accuracy:wedging_3d_rows", ("error_resultant",),
+    "wedging_3d": Accuracy("benchmarks.accuracy:wedging_3d_rows", ("error_resultant",),
                           (("error_resultant", "3-D wedging: contact resultant after release"),), default=False),
-    "insertion": Problem("femcontact.scenarios.insertion:accuracy_rows", ("error_peak_force", "error_two_point_onset"),
-                         (("error_peak_force", "2-D insertion: in-hole peak insertion force"),
-                          ("error_two_point_onset", "2-D insertion: two-point onset depth"))),
+    **{family.name: family.accuracy for family in FAMILIES if family.accuracy},
 }
+"""The problems measured: those of this module, then every study family's own rows (its `accuracy`)."""
 
 
 def measure(name: str) -> tuple[list[dict], list[str]]:

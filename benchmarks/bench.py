@@ -31,8 +31,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_half_width
-from femcontact.scenarios import hertz
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
+from femcontact.families.hertz import benchmark as hertz
 from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 
@@ -160,7 +160,7 @@ def wedging_case(overrides: list[str] = ()) -> dict:
     overrides, runs once unmeasured first, and the variants after it reuse its forms): Newton
     iterations per increment by step, residual assemblies and Newton directions, wall time (s),
     status."""
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
 
     scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", list(overrides))
     if not overrides:
@@ -227,7 +227,7 @@ def hertz_table() -> list[dict]:
 
 
 def wedging_scene(resolution: float) -> dict:
-    return resolve({"name": "bench", "dim": 2, "geometry": "peg_in_hole", "effects": ["friction", "plane_strain"],
+    return resolve_scene({"name": "bench", "dim": 2, "geometry": "peg_in_hole", "effects": ["friction", "plane_strain"],
                     "peg": {"width": 40.0, "length": 10.0, "insertion_depth": 5.0}, "hole": {"width": 40.1},
                     "contact": {"mu": 0.2}, "mesh": {"resolution": resolution},
                     "steps": [{"name": "load", "increments": 5, "force": [-5.0, 1.0]},
@@ -240,7 +240,7 @@ def hertz_with(effects, size_max=1.0, **extra) -> dict:
     data = dict(hertz.scene(a / 10.5, increments=4), effects=effects, **extra)
     data["mesh"] = dict(data["mesh"], size_max=size_max)
     data["rigid_body"] = {"dofs": {"x": "held", "y": "free", "rz": "held"}}
-    return resolve(data)
+    return resolve_scene(data)
 
 
 def per_increment(scene: dict) -> dict:

@@ -21,7 +21,7 @@ import tempfile
 
 from femcontact.outputs.tables import markdown_table
 from femcontact.references.hertz import analytic_sphere, benchmark_radius_3d, BENCHMARK_3D
-from femcontact.scenarios import hertz
+from femcontact.families.hertz import benchmark as hertz
 
 from benchmarks.bench import GETFEM_DRIVER, OUT, _run, getfem_available, time_within
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.config.scene import load_scene, resolve
+from femcontact.families import load_scene, resolve_scene
 from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 from geometry.measures import cell_coordinates
@@ -96,7 +96,7 @@ def cost_rows() -> list[dict]:
     for name, scene in (("Hertz, ~10k dofs", bench.hertz_with(["plane_strain"])), ("wedging, thesis scene", bench.wedging_scene(1.6))):
         for law in ("elastic", "plastic"):
             data = dict(scene, effects=list(scene["effects"]) + (["plasticity"] if law == "plastic" else []))
-            variant = resolve(data)
+            variant = resolve_scene(data)
             bench.per_increment(variant)  # compile outside the timing
             best = min((bench.per_increment(variant) for _ in range(3)), key=lambda r: r["seconds_per_increment"])
             rows.append({"scene": name, "law": law, "dofs": best["dofs"], "seconds_per_increment": best["seconds_per_increment"],

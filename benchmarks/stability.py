@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from femcontact.references import two_point_statics
-from femcontact.config.scene import case_id, read_toml, resolve
+from femcontact.config.scene import case_id, read_toml
+from femcontact.families import resolve_scene
 from femcontact.config.schema import set_key
 from femcontact.io import read_result
 from femcontact.outputs.result import ANSWERS, status_counts
@@ -165,7 +166,7 @@ def case_dirs(name: str, rows: list[dict], scene_path: Path) -> list[Path]:
         data = json.loads(json.dumps(base))
         for key, value in row.items():
             set_key(data, key, value)
-        dirs.add(OUT.parent / name / "cases" / case_id(resolve(data)))
+        dirs.add(OUT.parent / name / "cases" / case_id(resolve_scene(data)))
     return sorted(dirs)
 
 

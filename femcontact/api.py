@@ -33,7 +33,7 @@ def load_scene(path, overrides=None) -> dict:
     """The resolved scene of a TOML file (every default filled in), with `overrides` applied:
     {"peg.insertion_depth": 6, "steps.0.force": [-5, 1]} or ["peg.insertion_depth=6"] as --set
     takes them. Raises InputError naming the file and the bad key or value."""
-    from femcontact.config.scene import load_scene as load
+    from femcontact.families import load_scene as load
 
     return load(path, overrides or ())
 
@@ -114,7 +114,7 @@ def run(scene, out=None, quiet: bool = False, checkpoint: bool = False, restart=
         scene = load_scene(scene)
     quiet_logging()
     MPI = start_mpi_for_meshing()
-    from femcontact.scenarios.case import run_case
+    from femcontact.families.case import run_case
 
     comm = MPI.COMM_WORLD
     check_restart(scene, checkpoint, restart, comm.size)
@@ -172,8 +172,8 @@ def _withdraw(case_dir: Path, created: bool) -> None:
 
 def check_restart(scene: dict, checkpoint: bool, restart, ranks: int) -> None:
     """Refuse checkpoint/restart requests that cannot work, before anything is written."""
-    if scene["kind"] == "rcc" and (checkpoint or restart):
-        raise InputError("--checkpoint/--restart: an rcc case has no steps to share")
+    if not scene.get("steps") and (checkpoint or restart):
+        raise InputError(f"--checkpoint/--restart: a case of kind {scene['kind']!r} has no steps to share")
     if restart is None:
         return
     path = Path(restart) / "checkpoint.json"

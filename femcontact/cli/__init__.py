@@ -17,9 +17,9 @@ COMMANDS = {
     "study": ("femcontact.study.command", "run the cases of a study that are not done yet"),
     "report": ("femcontact.study.report", "write the plots, snapshots and summary of a study"),
     "animate": ("femcontact.outputs.animation", "film of a run (MP4 and GIF): stress, both bodies, forces"),
-    "rcc": ("femcontact.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
+    "rcc": ("femcontact.families.rcc.cli", "remote-centre-compliance device: wrench, displace, centre"),
     "whitney": ("femcontact.cli.whitney", "compliantly supported rigid-peg insertion (Whitney), analytic"),
-    "hertz": ("femcontact.cli.hertz", "Hertz benchmark (docs/references.md) at one contact-zone size"),
+    "hertz": ("femcontact.families.hertz.cli", "Hertz benchmark (docs/references.md) at one contact-zone size"),
 }
 
 

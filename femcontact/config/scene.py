@@ -1,10 +1,11 @@
 """Scene files: one simulation described in TOML, validated against a schema.
 
-A scene names its `kind` ("contact": the finite-element contact solver; "rcc": the
-RCC truss), its geometry, materials, contact parameters, the physical `effects`
-it calls for, and its load steps. `load_scene` returns the fully resolved scene
-(every default filled in); `case_id` hashes it, so two files that differ only in
-key order or formatting describe the same case.
+A contact scene (`kind = "contact"`, the finite-element contact solver) names its geometry,
+materials, contact parameters, the physical `effects` it calls for, and its load steps.
+`resolve_contact` returns the fully resolved scene (every default filled in); study families
+add kinds of their own on top of it (femcontact.families.resolve_scene, which also reads scene
+files). `case_id` hashes a resolved scene, so two files that differ only in key order or
+formatting describe the same case.
 """
 import hashlib
 import json
@@ -264,7 +265,8 @@ OUTPUTS = {
 def contact_schema(dim: int, geometry: str) -> dict:
     """Schema of a contact scene for the given dimension and geometry."""
     schema = {
-        "kind": Field("str", "contact", choices=("contact", "rcc")),
+        "kind": Field("str", "contact", "'contact': the finite-element contact solver (study families add kinds "
+                      "of their own, below)", choices=("contact",)),
         "accuracy": Field("str", "custom", "preset of mesh and solver keys the scene leaves unset "
                           "(docs/accuracy.md): 'fast', 'balanced', 'accurate', or 'custom' (none)",
                           choices=tuple(PRESETS)),
@@ -304,7 +306,7 @@ def contact_schema(dim: int, geometry: str) -> dict:
     return schema
 
 
-def _check_contact(scene: dict) -> None:
+def check_contact(scene: dict) -> None:
     dim, effects = scene["dim"], scene["effects"]
     problems = []
     if "plane_strain" in effects and "plane_stress" in effects:
@@ -419,64 +421,15 @@ def petsc_option_problems(options: dict) -> list[str]:
     return problems
 
 
-def resolve(data: dict, overrides=()) -> dict:
-    """Validate raw scene data (plus overrides) and return the resolved scene."""
-    data = json.loads(json.dumps(data))  # deep copy, plain types
-    apply_overrides(data, overrides)
-    kind = data.get("kind", "contact")
-    if kind == "rcc":
-        from femcontact.rcc import device as rcc
-
-        scene = validate(data, rcc.SCHEMA)
-        rcc.device_of(scene)  # refuses an impossible device (h <= 0, T >= h) before running
-        return scene
-    if kind == "dislodging":
-        return _resolve_dislodging(data)
-    if kind == "dislodging_beyond":
-        return _resolve_dislodging_beyond(data)
-    if kind != "contact":
-        raise InputError(f"kind = {kind!r}: not allowed, expected one of 'contact', 'rcc', 'dislodging', "
-                         "'dislodging_beyond'")
+def resolve_contact(data: dict) -> dict:
+    """Validate raw contact-scene data (overrides applied) and return the resolved scene: the
+    contact schema of its `dim` and `geometry`, a named `accuracy` preset applied, every check."""
     head = validate({k: data[k] for k in ("dim", "geometry") if k in data},
                     {k: contact_schema(2, "peg_in_hole")[k] for k in ("dim", "geometry")})
     if isinstance(data.get("accuracy"), str):
         apply_preset(data)
     scene = validate(data, contact_schema(head["dim"], head["geometry"]))
-    _check_contact(scene)
-    return scene
-
-
-def _resolve_dislodging(data: dict) -> dict:
-    """A dislodging scene: a 2-D peg-in-hole contact scene plus its [dislodging] table."""
-    from femcontact.config import dislodging
-
-    data = dict(data)
-    table = data.pop("dislodging", {})
-    if not isinstance(table, dict):
-        raise InputError(f"dislodging = {table!r}: expected a table")
-    scene = validate({**data, "kind": "contact"}, contact_schema(2, "peg_in_hole"))
-    _check_contact(scene)
-    scene["dislodging"] = validate(table, dislodging.DISLODGING, "dislodging.")
-    scene["kind"] = "dislodging"
-    dislodging.check(scene)
-    return scene
-
-
-def _resolve_dislodging_beyond(data: dict) -> dict:
-    """A dislodging_beyond scene: a 2-D or 3-D peg-in-hole contact scene plus its
-    [dislodging] table (config/dislodging_beyond.py)."""
-    from femcontact.config import dislodging_beyond
-
-    data = dict(data)
-    table = data.pop("dislodging", {})
-    if not isinstance(table, dict):
-        raise InputError(f"dislodging = {table!r}: expected a table")
-    head = validate({k: data[k] for k in ("dim",) if k in data}, {"dim": contact_schema(2, "peg_in_hole")["dim"]})
-    scene = validate({**data, "kind": "contact"}, contact_schema(head["dim"], "peg_in_hole"))
-    _check_contact(scene)
-    scene["dislodging"] = validate(table, dislodging_beyond.BEYOND, "dislodging.")
-    scene["kind"] = "dislodging_beyond"
-    dislodging_beyond.check(scene)
+    check_contact(scene)
     return scene
 
 
@@ -503,14 +456,6 @@ def apply_overrides(data: dict, overrides=()) -> None:
     items = overrides.items() if isinstance(overrides, dict) else overrides
     for item in items:
         set_key(data, *(parse_assignment(item) if isinstance(item, str) else item))
-
-
-def load_scene(path, overrides=()) -> dict:
-    """Read, override (see `apply_overrides`) and validate a scene file."""
-    try:
-        return resolve(read_toml(path), overrides)
-    except InputError as error:
-        raise InputError(f"{path}: {error}") from None
 
 
 def case_id(scene: dict) -> str:

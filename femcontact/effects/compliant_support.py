@@ -13,7 +13,7 @@ the support's wrench on the peg, force at C and moment about C (global axes, N a
 
 K (3x3 in 2-D for x, y, rz; 6x6 in 3-D) from `support.model`: 'springs' (diagonal kx, kz,
 ktheta, ktorsion), 'matrix' (`support.stiffness`, row by row) or 'rcc' (the RCC truss design
-formula at its compliance centre, femcontact.rcc.device). K is in the global frame: x lateral,
+formula at its compliance centre, femcontact.physics.rcc). K is in the global frame: x lateral,
 y (2-D) / z (3-D) along the hole axis. The rigid body's equations gain -(F, M_C + (C - x_ref) x F)
 and their exact derivative with respect to the pose (central differences of this smooth map),
 so the peg's dofs stay 'free' and are pulled by the springs.
@@ -50,7 +50,7 @@ def stiffness_matrix(scene: dict) -> np.ndarray:
             raise InputError(f"support.stiffness = {values}: not positive definite (smallest eigenvalue "
                              f"{smallest:.3g}); a support must resist every motion of the peg")
         return K
-    from femcontact.rcc.device import Rcc, formula_stiffness
+    from femcontact.physics.rcc import Rcc, formula_stiffness
 
     r = support["rcc"]
     S = formula_stiffness(Rcc(r["b"], r["peg_length"], r["theta_l"], r["k"]))

@@ -89,7 +89,7 @@ def crossing(p: Insertion, rho: float, depths) -> dict:
     """The rounded rim's way in at the increasing depths s (mm): free ('none'), on the chamfer,
     rolling over the edge. Stops (`handover`) at the first depth where the rounding is on the wall,
     a hole edge touches the peg's straight side or the other side's rounding touches too: the
-    sharp tier's wall mapping (femcontact.scenarios.insertion) is exact there.
+    sharp tier's wall mapping (femcontact.families.insertion.metrics) is exact there.
     Arrays depth, Fz, Fx, M, theta (deg), phase and `handover` (that depth or None)."""
     if not 0.0 < rho < p.r:
         raise InputError(f"peg.corner_radius = {rho}: the rounding must lie in (0, r = {p.r})")

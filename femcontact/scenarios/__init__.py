@@ -1,1 +1,2 @@
-"""Study families: scene factories and the metrics of wedging, the Hertz benchmark, benchmarks."""
+"""Measurement programs (`make bench`, `make accuracy`, `make stability`, `make plasticity`) and the
+implicit-Euler time integrator with events (`dynamics.py`)."""

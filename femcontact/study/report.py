@@ -6,7 +6,7 @@ snapshots/CASE_ID.png for the cases [snapshots] selects, animations/CASE_ID.mp4 
 summary.md and index.html (the same table and pictures, for a browser). The table shows
 the headline columns ([report] columns, or by default the family's primary metrics, swept
 keys, status, case id and wall time), the answer first; labels with units from
-femcontact.study.units; every
+femcontact.outputs.units; every
 column is in results.csv and results.sqlite. The database is rebuilt from the case
 directories first, so the report shows exactly what is on disk.
 """
@@ -20,12 +20,14 @@ import textwrap
 from collections import Counter
 from pathlib import Path
 
+from femcontact import families
 from femcontact.config.schema import get_key
-from femcontact.outputs.result import ANSWERS, status_counts
 from femcontact.errors import InputError
 from femcontact.io import make_dir, write_atomic, write_text_atomic
-from femcontact.outputs.tables import format_value, markdown_table
-from femcontact.study import units
+from femcontact.outputs import units
+from femcontact.outputs.figures import plain_log_ticks
+from femcontact.outputs.result import status_counts
+from femcontact.outputs.tables import markdown_table
 from femcontact.study.study_file import MAX_COLUMNS, flatten, load_study, matches
 
 
@@ -55,13 +57,13 @@ def command(args) -> int:
     plots = [write_plot(spec, rows, study.results, study.keys) for spec in study.plots]
     snapshots = write_snapshots(study, {row["case_id"]: row for row in rows})
     films = write_animations(study, {row["case_id"]: row for row in rows})
-    family = []  # the family's own tables, before the per-case table
-    if study.cases and study.cases[0].scene.get("kind") == "dislodging":
-        from femcontact.scenarios import dislodging
-
-        plots += dislodging.report(study)
-        family = dislodging.summary_blocks(study)
-    document = summary(study, columns, rows, plots, snapshots, family, films)
+    family = families.study_family(case.scene for case in study.cases)
+    before = []  # the family's own tables, before the per-case table
+    if family and family.report:
+        written, before = family.report(study)
+        plots += written
+    after = family.tables(rows, column) if family and family.tables else []
+    document = summary(study, columns, rows, plots, snapshots, before, films, after)
     markdown = write_markdown(document, study.results / "summary.md")
     page = write_html(document, study.results / "index.html", f"Study {study.settings['name']}")
     print(f"study {study.settings['name']}: {len(rows)} of {len(study.cases)} cases have results")
@@ -92,7 +94,7 @@ def headline_columns(study, csv_columns: list[str], rows: list[dict]) -> list[st
                                  f"nor a scene key (columns: {', '.join(csv_columns)})")
         return answer_first(list(declared), study.keys, rows)
     failed = any(row["status"] != "ok" for row in rows)
-    default = [*units.primary_metrics(csv_columns), *study.keys, "status", "case_id", "wall"] + \
+    default = [*families.primary_columns(csv_columns), *study.keys, "status", "case_id", "wall"] + \
         (["reason"] if failed else [])
     return answer_first(list(dict.fromkeys(default))[:MAX_COLUMNS], study.keys, rows)
 
@@ -170,16 +172,9 @@ def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    if spec["kind"] == "wedge_map":
-        return write_wedge_map(spec, rows, results)
-    if spec["kind"] in ("force_curves", "sweep", "jam_map"):
-        from femcontact.study import snap_fit_report
-
-        return getattr(snap_fit_report, f"write_{spec['kind']}")(spec, rows, results, column)
-    from femcontact.study.insertion_plots import PLOTS
-
-    if spec["kind"] in PLOTS:
-        return PLOTS[spec["kind"]](spec, rows, results)
+    family_plot = families.plot_kind(spec["kind"])
+    if family_plot:
+        return family_plot(spec, rows, results, column)
     x, y = spec["x"], spec["y"]
     figure, axes = plt.subplots(figsize=(10, 4.8), layout="constrained")
     colours = iter(plt.get_cmap("tab10").colors * 10)
@@ -191,7 +186,7 @@ def write_plot(spec: dict, rows: list[dict], results: Path, keys: list[str]) -> 
     axes.set(xlabel=units.label(x), ylabel=units.label(y), xscale="log" if spec["logx"] else "linear",
              yscale="log" if spec["logy"] else "linear")
     axes.set_title(textwrap.fill(spec["title"] or f"{units.label(y)} against {units.label(x)}", 70), fontsize=11)
-    _plain_log_ticks(axes, spec)
+    plain_log_ticks(axes, spec)
     axes.grid(True, alpha=0.3)
     if any(curve["label"] for curve in lines):
         axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
@@ -209,120 +204,8 @@ def _order(text: str) -> tuple:
     return (0, value, "") if _number(value) else (1, 0, text)
 
 
-def _plain_log_ticks(axes, spec: dict) -> None:
-    """Tick labels 2, 3, 4 instead of 2 x 10^0 on a log axis spanning less than two decades."""
-    from matplotlib.ticker import FuncFormatter
-
-    for name, axis, limits in (("logx", axes.xaxis, axes.get_xlim()), ("logy", axes.yaxis, axes.get_ylim())):
-        if spec[name] and min(limits) > 0 and max(limits) / min(limits) < 100:
-            axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
-            axis.set_minor_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
-
-
 def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def write_wedge_map(spec: dict, rows: list[dict], results: Path) -> Path:
-    """Simulated wedged / not wedged (filled circle / cross; green when it agrees with the analytic
-    condition l_crit <= l_d <= mu d, red when not) in the plane of two columns, with the analytic
-    bounds drawn: x = 1 and y = 1 for the normalised map (depth_over_l_crit, depth_over_l_max);
-    for y = peg.insertion_depth against clearance_ratio or contact.mu, the curves l_crit and
-    l_max = mu d for the most common peg width (other widths are left out), one per value of the
-    parameter not on the axis. Needs the metrics `wedged` and `analytic_wedged` (femcontact.wedging)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    x, y = spec["x"], spec["y"]
-    points = []
-    for row in rows:
-        if row["status"] not in ANSWERS:  # a load without equilibrium answers: not wedged
-            continue
-        xv, yv, wedged, analytic = column(row, x), column(row, y), column(row, "wedged"), column(row, "analytic_wedged")
-        if all(isinstance(v, (int, float)) for v in (xv, yv, wedged, analytic)) and math.isfinite(yv):
-            points.append((xv, yv, bool(wedged), bool(analytic), row))
-    physical = y == "peg.insertion_depth" and x in ("clearance_ratio", "contact.mu")
-    if physical and points:
-        widths = [column(p[4], "peg.width") for p in points]
-        d = max(set(widths), key=widths.count)
-        points = [p for p, w in zip(points, widths) if w == d]
-    if rows and not points:
-        raise InputError(f"[[plot]] wedge_map {y} against {x}: no ok case has numbers for both and the metrics "
-                         "wedged, analytic_wedged")
-    figure, axes = plt.subplots(figsize=(9, 5), layout="constrained")
-    for wedged, marker, label in ((True, "o", "simulated: wedged"), (False, "x", "simulated: not wedged")):
-        for agree, colour in ((True, "tab:green"), (False, "tab:red")):
-            chosen = [(p[0], p[1]) for p in points if p[2] == wedged and (p[2] == p[3]) == agree]
-            if chosen:
-                axes.plot(*zip(*chosen), marker, color=colour, markersize=7, linestyle="none",
-                          label=f"{label} ({'agrees' if agree else 'disagrees'})")
-    if x == "depth_over_l_crit" or y == "depth_over_l_max":
-        if x == "depth_over_l_crit":
-            axes.axvline(1.0, color="k", linestyle="--", label="l_d = l_crit")
-        if y == "depth_over_l_max":
-            axes.axhline(1.0, color="k", linestyle=":", label="l_d = mu d")
-    elif physical and points:
-        xs = np.array([p[0] for p in points])
-        grid = np.linspace(0.0, xs.max() * 1.15, 200)[1:]
-        if x == "clearance_ratio":
-            axes.plot(grid, d * np.sqrt(1 / (1 - grid) ** 2 - 1), "k--", label="l_crit(c)")
-            for mu in sorted({column(p[4], "contact.mu") for p in points}):
-                axes.axhline(mu * d, color="k", linestyle=":", label=f"l_max = mu d (mu = {mu:g})")
-                axes.annotate(f"mu = {mu:g}", (1.0, mu * d), xycoords=("axes fraction", "data"), xytext=(-3, 2),
-                              textcoords="offset points", ha="right", va="bottom", fontsize=7,
-                              annotation_clip=True)
-        else:
-            axes.plot(grid, grid * d, "k:", label="l_max = mu d")
-            for D in sorted({column(p[4], "hole.width") for p in points}):
-                axes.axhline(math.sqrt(D * D - d * d), color="k", linestyle="--", label=f"l_crit (D = {D:g})")
-                axes.annotate(f"l_crit, D = {D:g}", (1.0, math.sqrt(D * D - d * d)), xycoords=("axes fraction", "data"),
-                              xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom", fontsize=7,
-                              annotation_clip=True)
-        axes.set_ylim(0, max(p[1] for p in points) * 1.15)
-    agree = sum(p[2] == p[3] for p in points)
-    axes.set(xlabel=units.label(x), ylabel=units.label(y),
-             xscale="log" if spec["logx"] else "linear", yscale="log" if spec["logy"] else "linear")
-    title = spec["title"] or f"wedge map: {units.label(y)} against {units.label(x)}"
-    axes.set_title(textwrap.fill(title, 60) + f"\nagreement with the analytic condition: {agree}/{len(points)}",
-                   fontsize=11)
-    _plain_log_ticks(axes, spec)
-    axes.grid(True, alpha=0.3)
-    if points:
-        axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    path = results / (spec["file"] or re.sub(r"[^\w.-]+", "_", f"wedge_map_{y}_vs_{x}") + ".png")
-    write_atomic(path, lambda stream: figure.savefig(stream, format="png", dpi=120), binary=True)
-    plt.close(figure)
-    return path
-
-
-def wedge_table(rows: list[dict]) -> list[tuple]:
-    """Summary blocks: agreement of the simulated `wedged` with `analytic_wedged`, overall, away from
-    the bounds and near them (`near_boundary`), and the disagreeing cases. None without those metrics."""
-    cases = [row for row in rows if row["status"] == "ok"
-             and _number(column(row, "wedged")) and _number(column(row, "analytic_wedged"))]
-    if not cases:
-        return []
-
-    def rate(subset):
-        n = len(subset)
-        k = sum(bool(column(r, "wedged")) == bool(column(r, "analytic_wedged")) for r in subset)
-        return f"{k}/{n}" + (f" ({100 * k / n:.0f} %)" if n else "")
-
-    near = [r for r in cases if column(r, "near_boundary")]
-    far = [r for r in cases if not column(r, "near_boundary")]
-    blocks = [("h2", "Wedge map: simulated against l_crit <= l_d <= mu d"),
-              ("table", ["cases", "agree"], [["all", rate(cases)], ["away from the bounds", rate(far)],
-                                             ["near a bound (within 5 % of mu d)", rate(near)]])]
-    wrong = [r for r in cases if bool(column(r, "wedged")) != bool(column(r, "analytic_wedged"))]
-    if wrong:
-        names = ["case_id", "peg.width", "hole.width", "contact.mu", "peg.insertion_depth", "l_crit", "l_max",
-                 "wedged", "wedge_reason", "residual_force_A"]
-        blocks += [("p", "Disagreements:"),
-                   ("table", [units.label(n) for n in names], [[_cell(column(r, n), n) for n in names] for r in wrong])]
-    return blocks
 
 
 def write_snapshots(study, rows: dict) -> list[Path]:
@@ -373,10 +256,11 @@ def write_animations(study, rows: dict) -> list[Path]:
     return paths
 
 
-def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=(), films=()) -> list[tuple]:
+def summary(study, columns: list[str], rows: list[dict], plots, snapshots, family=(), films=(), after=()) -> list[tuple]:
     """The report as blocks ("h1" | "h2" | "p", text), ("table", header, rows), ("img", path, caption),
     ("video", MP4 path, GIF path, caption), written as Markdown and as HTML; `family`: the study
-    family's own blocks, before the case table; `films`: the animations' MP4 and GIF paths."""
+    family's own blocks, before the case table, `after`: those after it; `films`: the animations'
+    MP4 and GIF paths."""
     counts = status_counts(rows)
     blocks = [("h1", f"Study {study.settings['name']}")]
     if study.settings["description"]:
@@ -393,11 +277,8 @@ def summary(study, columns: list[str], rows: list[dict], plots, snapshots, famil
         if family:
             blocks.append(("h2", "Cases"))
         blocks.append(("table", [units.label(c) for c in columns],
-                       [[_cell(column(row, c), c) for c in columns] for row in rows]))
-    blocks += wedge_table(rows)
-    from femcontact.study.snap_fit_report import table as snap_fit_table
-
-    blocks += snap_fit_table(rows, column)
+                       [[units.cell(column(row, c), c) for c in columns] for row in rows]))
+    blocks += list(after)
     if plots:
         blocks.append(("h2", "Plots"))
         blocks += [("img", p.name, p.stem) for p in plots]
@@ -487,8 +368,3 @@ def _numeric_text(text: str) -> bool:
         return False
 
 
-def _cell(value, name: str = "") -> str:
-    """A table cell: yes/no for flags, numbers to 4 significant digits, lists as (a, b)."""
-    if name in units.FLAGS and value in (0, 1):
-        return "yes" if value else "no"
-    return format_value(value).replace("\n", " ")

@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
-from femcontact.config.scene import apply_overrides, case_id, read_toml, resolve
+from femcontact.config.scene import apply_overrides, case_id, read_toml
+from femcontact.families import plot_kinds, resolve_scene
 from femcontact.config.schema import Field, TableList, get_key, set_key, validate
 from femcontact.errors import InputError
 
@@ -51,11 +52,8 @@ SCHEMA = {
         "x": Field("str", doc="column on the x axis (a swept or scene key, a metric, time.PHASE)"),
         "y": Field("str", doc="column on the y axis"),
         "series": Field("str", "", "column whose values make separate curves"),
-        "kind": Field("str", "line", "line, scatter, wedge_map (wedged markers + analytic bounds), force_curves "
-                      "(list metrics against each other, reduced model beside), sweep (a metric, model beside), jam_map "
-                      "(snap fit); insertion_history, jamming_diagram, wedging_window (femcontact/study/insertion_plots.py)",
-                      choices=("line", "scatter", "wedge_map", "force_curves", "sweep", "jam_map", "insertion_history",
-                               "jamming_diagram", "wedging_window")),
+        "kind": Field("str", "line", "line, scatter, or a study family's plot kind (femcontact.families): "
+                      + ", ".join(plot_kinds()), choices=("line", "scatter", *plot_kinds())),
         "select": Field("any", {}, "force_curves, sweep: only cases whose scene has key = value (or one of a list)",
                         check=lambda v: None if isinstance(v, dict) else "must be a table"),
         "logx": Field("bool", False, "logarithmic x axis"),
@@ -241,7 +239,7 @@ def _check_scene_once(study: Study) -> None:
     """Refuse in one line a base scene that is invalid whatever the sweep sets: its error names
     no swept key and the first case fails with the same error."""
     try:
-        resolve(study.base)
+        resolve_scene(study.base)
         return
     except InputError as error:
         message = str(error)
@@ -249,7 +247,7 @@ def _check_scene_once(study: Study) -> None:
     if any(form in message for form in forms):
         return  # the sweep may mend it; each case says
     try:
-        resolve(_case_data(study.base, next(expand(study.sweep))))
+        resolve_scene(_case_data(study.base, next(expand(study.sweep))))
     except InputError as error:
         if str(error) == message:
             raise InputError(f"{study.path}: {study.count} invalid case(s), nothing was run: {message} (the scene "
@@ -269,7 +267,7 @@ def iter_cases(study: Study) -> Iterator[Case]:
     problems, seen = {}, set()
     for params in expand(study.sweep):
         try:
-            scene = resolve(_case_data(study.base, params))
+            scene = resolve_scene(_case_data(study.base, params))
             if any(key.endswith("_type") for key in scene.get("solver", {}).get("petsc_options", {})):
                 from femcontact.solver.linear import check_petsc_options  # PETSc is imported only for these
 

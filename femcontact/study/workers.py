@@ -29,7 +29,7 @@ from pathlib import Path
 ENTRY = "femcontact.cli:main"
 """What a worker calls per case: `module:function`, function(argv) -> exit code."""
 
-PRELOAD = ("femcontact.process:start_mpi_for_meshing", "femcontact.cli.run", "femcontact.scenarios.case",
+PRELOAD = ("femcontact.process:start_mpi_for_meshing", "femcontact.cli.run", "femcontact.families.case",
            "femcontact.solver.stepping", "femcontact.outputs.fields", "femcontact.outputs.history",
            "femcontact.outputs.progress")
 """What a worker imports (`module`) or calls (`module:function`) before its first case: what a

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from femcontact.solver.stepping import Simulation
 
 SCENE = {
@@ -21,7 +21,7 @@ KEYS = ("reaction_support_A_x", "reaction_support_A_y", "reaction_support_B_x", 
 
 
 def run(comm) -> dict:
-    simulation = Simulation(resolve(SCENE), comm)
+    simulation = Simulation(resolve_scene(SCENE), comm)
     simulation.run()
     return simulation.step_end_rows()
 

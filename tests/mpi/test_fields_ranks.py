@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from femcontact.outputs.fields import FieldSeries
 from femcontact.solver.stepping import Simulation
 
@@ -22,7 +22,7 @@ SCENE = {
 
 
 def write(comm, directory: Path) -> None:
-    simulation = Simulation(resolve(SCENE), comm)
+    simulation = Simulation(resolve_scene(SCENE), comm)
     simulation.listeners.append(FieldSeries(simulation, directory))
     simulation.run()
 

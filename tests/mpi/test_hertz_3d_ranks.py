@@ -5,7 +5,7 @@ import pytest
 from mpi4py import MPI
 
 from femcontact.references.hertz import benchmark_radius_3d
-from femcontact.scenarios import hertz
+from femcontact.families.hertz import benchmark as hertz
 from femcontact.solver.stepping import Simulation
 
 

@@ -2,7 +2,7 @@
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from geometry import measures
 from geometry.model import build
 
@@ -15,7 +15,7 @@ SCENE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10,
 @pytest.mark.parametrize("dim", [2, 3])
 def test_mesh_is_distributed(dim):
     world = MPI.COMM_WORLD
-    scene = resolve({**SCENE, "dim": dim, "mesh": {"resolution": 1.0 if dim == 2 else 0.3}})
+    scene = resolve_scene({**SCENE, "dim": dim, "mesh": {"resolution": 1.0 if dim == 2 else 0.3}})
     model = build(scene, world)
     serial = build(scene, MPI.COMM_SELF)  # the same mesh, whole on every rank
     tdim = model.mesh.topology.dim

@@ -6,7 +6,7 @@ tolerance (1e-6 relative)."""
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from femcontact.solver.stepping import Simulation
 
 SCENE = {
@@ -19,7 +19,7 @@ KEYS = ("reaction_support_A_x", "reaction_support_B_x", "contact_A_Fx", "contact
 
 
 def run(comm) -> dict:
-    simulation = Simulation(resolve(SCENE), comm)
+    simulation = Simulation(resolve_scene(SCENE), comm)
     simulation.run()
     return simulation.step_end_rows()
 

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import load_scene
-from femcontact.scenarios.snap_fit import snap_fit_metrics
+from femcontact.families import load_scene
+from femcontact.families.snap_fit.metrics import snap_fit_metrics
 from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[2] / "scenes" / "snap_fit_2d.toml"

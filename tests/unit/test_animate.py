@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 from femcontact.cli import main
-from femcontact.config.scene import load_scene
-from femcontact.scenarios.case import run_contact
+from femcontact.families import load_scene
+from femcontact.families.case import run_contact
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -195,6 +195,6 @@ def test_named_effects_are_the_scene_effects_that_build_terms():
 
 
 def test_scene_page_is_generated_from_the_schema():
-    from femcontact.config.docs import scene_page
+    from femcontact.families.docs import scene_page
 
     assert (ROOT / "docs" / "scenes.md").read_text() == scene_page()

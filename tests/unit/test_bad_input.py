@@ -150,7 +150,7 @@ def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, 
 
 def test_a_positive_definite_support_matrix_is_the_springs_it_spells(tmp_path):
     """The 'matrix' model with the springs' diagonal is the springs' support (the same K)."""
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
     from femcontact.effects.compliant_support import stiffness_matrix
 
     springs = load_scene(INSERTION)
@@ -494,8 +494,8 @@ def test_wedge_angles_are_null_with_a_reason_when_contact_is_lost():
     are undefined, reported as None (JSON null) with the reason, and the peg is not wedged."""
     from types import SimpleNamespace
 
-    from femcontact.config.scene import load_scene
-    from femcontact.scenarios.wedging import wedge_metrics
+    from femcontact.families import load_scene
+    from femcontact.families.wedging.metrics import wedge_metrics
 
     scene = load_scene(WEDGING)
     row = {"step": "release", "tilt_deg": 1.25, "applied_Fx": 0.0, "applied_Fy": 0.0, "stabilization_force": 0.0,
@@ -518,7 +518,7 @@ def test_mesh_guard_survives_overflowing_sizes(tmp_path, capsys):
     scene = str(SCENES / "wedging_3d.toml")
     assert_refused(*cli(capsys, "run", scene, *sets("hole.block_width=1e300"), "--out", tmp_path / "o"),
                    "mesh too large", "hole.block_width = 1e+300")
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
 
     for overrides in (["mesh.size_max=1e300"], ["mesh.contact_zone=1e300", "mesh.resolution=0.5"]):
         load_scene(WEDGING, overrides)  # a coarse or an all-fine mesh of a 2-D body: allowed
@@ -528,7 +528,7 @@ def test_mesh_size_estimate_is_within_a_factor_of_three_of_gmsh():
     """The guard's element estimate against the count gmsh produces (2-D scenes, < 1 s each)."""
     import gmsh
 
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
     from geometry import gmsh_tools, mesh_size
     from geometry.model import builder
 

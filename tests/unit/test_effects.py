@@ -10,12 +10,12 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from femcontact.solver.problem import Problem
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from geometry.model import build
 
 
 def problem(effects, **dynamics) -> Problem:
-    scene = resolve({"name": "effects", "dim": 2, "geometry": "block", "effects": effects,
+    scene = resolve_scene({"name": "effects", "dim": 2, "geometry": "block", "effects": effects,
                      "block": {"width": 4.0, "height": 2.0}, "indenter": {"shape": "flat", "width": 8.0},
                      "materials": {"block": {"E": 1000.0, "nu": 0.25}}, "dynamics": dynamics,
                      "mesh": {"contact_size": 0.5, "contact_zone": 1.0, "size_max": 1.0},
@@ -91,7 +91,7 @@ def test_compliant_support_is_built_only_when_named():
     not named: no support terms at all."""
     from pathlib import Path
 
-    from femcontact.config.scene import load_scene
+    from femcontact.families import load_scene
 
     path = Path(__file__).resolve().parents[2] / "scenes" / "insertion_2d.toml"
     coarse = ["mesh.contact_size=1.0", "mesh.size_max=3.0", "mesh.contact_zone=1.0", "steps.0.support_motion.y=0.0"]

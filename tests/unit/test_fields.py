@@ -10,8 +10,8 @@ import meshio
 import numpy as np
 import pytest
 
-from femcontact.config.scene import resolve
-from femcontact.scenarios.case import run_contact
+from femcontact.families import resolve_scene
+from femcontact.families.case import run_contact
 
 ROOT = Path(__file__).resolve().parents[2]
 MU, PRESS, SLIDE = 0.3, 1000.0, 0.05
@@ -35,7 +35,7 @@ def friction_block(dim: int, every: int = 1) -> dict:
     block = {"width": 20.0, "height": 10.0} if dim == 2 else {"width": 10.0, "height": 5.0, "depth": 10.0}
     mesh = {"contact_size": 0.5, "contact_zone": 9.0, "size_max": 2.0} if dim == 2 else \
         {"contact_size": 2.0, "contact_zone": 4.0, "size_max": 5.0}
-    return resolve({
+    return resolve_scene({
         "name": "friction_block", "dim": dim, "geometry": "block", "rigid": "indenter",
         "effects": ["friction", "plane_strain"] if dim == 2 else ["friction"],
         "block": block, "indenter": {"shape": "flat", "width": 40.0 if dim == 2 else 30.0},

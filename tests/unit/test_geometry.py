@@ -10,7 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from femcontact.errors import InputError
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from geometry import measures
 from geometry.model import build, write
 from geometry.placement import chamfer_height, peg_pose
@@ -29,7 +29,7 @@ def scene(dim=2, geometry="peg_in_hole", **sections):
             data.setdefault(key, {}).update(value)
         else:
             data[key] = value
-    return resolve(data)
+    return resolve_scene(data)
 
 
 # --- placement ---------------------------------------------------------------

@@ -62,9 +62,9 @@ def test_a_and_p0_against_the_closed_form(output):
     ({"steps": [{"force": [1.0, 0.0, -500.0]}]}, "steps[0]"),
 ])
 def test_a_quarter_model_or_sphere_it_cannot_hold_is_an_input_error(change, named):
-    from femcontact.config.scene import resolve
+    from femcontact.families import resolve_scene
     from femcontact.errors import InputError
-    from femcontact.scenarios.hertz import scene_3d
+    from femcontact.families.hertz.benchmark import scene_3d
 
     data = scene_3d(benchmark_radius_3d() / 2.5)
     for key, value in change.items():
@@ -79,4 +79,4 @@ def test_a_quarter_model_or_sphere_it_cannot_hold_is_an_input_error(change, name
         data.pop("effects")
         data["rigid_body"]["dofs"] = {}
     with pytest.raises(InputError, match=named.replace("[", r"\[").replace("]", r"\]").replace(".", r"\.")):
-        resolve(data)
+        resolve_scene(data)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.solver.linear import ContactUpdate, Factorization
 from femcontact.solver.stepping import Simulation
 

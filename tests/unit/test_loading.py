@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from femcontact.scenarios import hertz
+from femcontact.families.hertz import benchmark as hertz
 from femcontact.solver.loading import pulse
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 from femcontact.solver.stepping import Simulation
 
 
@@ -29,7 +29,7 @@ def test_ramp_step_and_release_schedule():
     data = dict(scene, steps=[{"name": "up", "force": [0.0, -100.0], "load_point": "indenter"},
                               {"name": "hold", "force": [0.0, -100.0], "amplitude": "step", "load_point": "indenter"},
                               {"name": "down", "load_point": "indenter"}])
-    simulation = Simulation(resolve(data))
+    simulation = Simulation(resolve_scene(data))
     schedule = simulation.schedule
     assert schedule.load(0, 0.25, 0.25).force[1] == pytest.approx(-25.0)
     assert schedule.load(1, 0.1, 0.1).force[1] == pytest.approx(-100.0)
@@ -44,7 +44,7 @@ def test_free_rigid_body_follows_newton_second_law():
     data["dynamics"] = dict(data["dynamics"], newmark_beta=0.25, newmark_gamma=0.5)
     data["steps"] = [{"name": "pull", "duration": 1e-3, "increments": 100, "force": [0.0, 1.0],
                       "amplitude": "step", "load_point": "indenter"}]
-    simulation = Simulation(resolve(data))
+    simulation = Simulation(resolve_scene(data))
     simulation.run()
     mass = 7.85e-9 * np.pi * 50.0 ** 2
     exact = 1.0 * 1e-3 ** 2 / (2 * mass)

@@ -8,7 +8,7 @@ of four and leaves room for the allocator's own growth.
 """
 from pathlib import Path
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from femcontact.scenarios import dislodging
+from femcontact.families.dislodging import report as dislodging
 from femcontact.study.report import answer_first
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "scenes" / "wedging_2d.toml"

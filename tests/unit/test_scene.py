@@ -9,7 +9,8 @@ import pytest
 from femcontact.references import peg_in_hole as analytic
 from femcontact.cli import main
 from femcontact.errors import InputError
-from femcontact.config.scene import case_id, load_scene, resolve
+from femcontact.config.scene import case_id
+from femcontact.families import load_scene, resolve_scene
 
 BASE = {"dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40, "length": 10, "insertion_depth": 5},
         "hole": {"width": 40.1}, "steps": [{"name": "load", "force": [-5.0, 1.0]}]}
@@ -42,8 +43,8 @@ def test_bad_scene_files_give_one_clear_message(tmp_path, change, message):
 
 def test_override_goes_through_validation():
     with pytest.raises(InputError, match="peg.insertion_depth = -1: out of range"):
-        resolve(BASE, ["peg.insertion_depth=-1"])
-    assert resolve(BASE, ["peg.insertion_depth=6"])["peg"]["insertion_depth"] == 6.0
+        resolve_scene(BASE, ["peg.insertion_depth=-1"])
+    assert resolve_scene(BASE, ["peg.insertion_depth=6"])["peg"]["insertion_depth"] == 6.0
 
 
 def test_cli_reports_bad_input_with_exit_code_2(tmp_path, capsys):
@@ -57,8 +58,8 @@ def test_case_id_ignores_order_and_formatting():
     reordered = {"steps": BASE["steps"], "hole": {"width": 40.10}, "peg": {"length": 10.0, "insertion_depth": 5,
                                                                            "width": 40}, "geometry": "peg_in_hole",
                  "dim": 2}
-    assert case_id(resolve(BASE)) == case_id(resolve(reordered))
-    assert case_id(resolve(BASE)) != case_id(resolve(BASE, ["peg.insertion_depth=5.0001"]))
+    assert case_id(resolve_scene(BASE)) == case_id(resolve_scene(reordered))
+    assert case_id(resolve_scene(BASE)) != case_id(resolve_scene(BASE, ["peg.insertion_depth=5.0001"]))
 
 
 @pytest.mark.parametrize("l_d, tilt_deg", [(4.0, 1.6784), (5.0, 1.2560), (6.0, 1.0148)])

@@ -23,7 +23,8 @@ import pytest
 from femcontact.cli import main
 from femcontact.study.database import Database
 from femcontact.errors import InputError
-from femcontact.config.scene import case_id, resolve
+from femcontact.config.scene import case_id
+from femcontact.families import resolve_scene
 from femcontact.config.schema import set_key
 from femcontact.study.study_file import count_cases, expand, load_study, to_toml
 from block_scene import BLOCK_SCENE
@@ -76,13 +77,13 @@ def results_of(path, name="demo") -> dict:
 # -- case ids, overrides, expansion ---------------------------------------------------------------
 
 def test_case_id_ignores_order_and_formatting_not_values():
-    a = resolve(tomllib.loads(BASE))
-    b = resolve(tomllib.loads('geometry="block"\n  dim=2\n[[steps]]\nforce=[0, -1e2]\nname="press"\n'
+    a = resolve_scene(tomllib.loads(BASE))
+    b = resolve_scene(tomllib.loads('geometry="block"\n  dim=2\n[[steps]]\nforce=[0, -1e2]\nname="press"\n'
                               '[[steps]]\nname="pull"\nforce=[10, -100.0]\n[contact]\nmu=0.20\n'))
     assert case_id(a) == case_id(b)
-    changed = resolve(tomllib.loads(BASE.replace("mu = 0.2", "mu = 0.2000001")))
+    changed = resolve_scene(tomllib.loads(BASE.replace("mu = 0.2", "mu = 0.2000001")))
     assert case_id(changed) != case_id(a)
-    assert case_id(resolve(tomllib.loads(BASE), ["steps.1.force=[10.0, -100.5]"])) != case_id(a)
+    assert case_id(resolve_scene(tomllib.loads(BASE), ["steps.1.force=[10.0, -100.5]"])) != case_id(a)
 
 
 def test_set_key_indexes_arrays():
@@ -97,8 +98,8 @@ def test_set_key_indexes_arrays():
 
 
 def test_scene_toml_round_trip_keeps_the_case_id():
-    scene = resolve(tomllib.loads(BASE), ['solver.petsc_options={ksp_type = "preonly", "pc_x.y" = 1}'])
-    again = resolve(tomllib.loads(to_toml(scene)))
+    scene = resolve_scene(tomllib.loads(BASE), ['solver.petsc_options={ksp_type = "preonly", "pc_x.y" = 1}'])
+    again = resolve_scene(tomllib.loads(to_toml(scene)))
     assert again == scene and case_id(again) == case_id(scene)
 
 
@@ -433,7 +434,7 @@ def test_a_large_sweep_is_counted_first_refused_past_the_limit_and_made_lazily(t
     import femcontact.study.study_file as study_file
 
     resolved = []
-    monkeypatch.setattr(study_file, "resolve", lambda data: resolved.append(1) or resolve(data))
+    monkeypatch.setattr(study_file, "resolve_scene", lambda data: resolved.append(1) or resolve_scene(data))
     study = load_study(path, results_root=results, resolve_cases=False)
     assert study.count == 100000 and study.cases == []
     cases = study_file.iter_cases(study)

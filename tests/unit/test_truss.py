@@ -4,9 +4,9 @@ import itertools
 import numpy as np
 import pytest
 
-from femcontact.rcc.device import Rcc, displacement, formula_stiffness
+from femcontact.families.rcc.device import Rcc, device_truss, displacement, formula_stiffness
 from femcontact.physics.rotation import rotation_numpy as rotation_zyx
-from femcontact.rcc.truss import State, Truss, angles_zyx, rotation_vector
+from femcontact.families.rcc.truss import State, Truss, angles_zyx, rotation_vector
 
 
 def test_rotation_order_is_rz_ry_rx_and_angles_round_trip():
@@ -57,7 +57,7 @@ def test_two_bar_truss_large_deflection_satisfies_exact_equilibrium():
 def test_rigid_tangent_matches_finite_differences():
     """The consistent tangent of a rigid set's holding wrench (spin update, moments about the
     moving reference point) against central differences at a strongly deflected state."""
-    truss, wrist = Rcc(50, 50, 70, 200).truss()
+    truss, wrist = device_truss(Rcc(50, 50, 70, 200))
     truss.prescribe(wrist, (2.0, -1.0, 1.5), (0.1, -0.05, 0.2))
     state = truss.solve_exact()
     tangent = truss.rigid_tangent(state, wrist)
@@ -81,7 +81,7 @@ def test_linear_and_exact_agree_for_tiny_motions(offset):
     """Motions of 1e-6 (mm, rad): the geometric nonlinearity is O(1e-6 / l_o) relative."""
     device = Rcc(50, 50, 70, 200, offset)
     for dof in range(6):
-        truss, wrist = device.truss()
+        truss, wrist = device_truss(device)
         motion = np.zeros(6)
         motion[dof] = 1e-6
         truss.prescribe(wrist, motion[:3], motion[3:], about=(0, 0, 0))

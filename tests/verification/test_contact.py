@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from femcontact.references.hertz import benchmark_half_width
-from femcontact.scenarios import hertz
-from femcontact.config.scene import resolve
+from femcontact.families.hertz import benchmark as hertz
+from femcontact.families import resolve_scene
 from femcontact.solver.stepping import Simulation
 
 
 def simulate(data: dict) -> Simulation:
-    simulation = Simulation(resolve(data))
+    simulation = Simulation(resolve_scene(data))
     simulation.run()
     return simulation
 
@@ -201,7 +201,7 @@ def test_restart_from_checkpoint_matches_full_run(tmp_path, wedged):
     prefix_data["steps"] = prefix_data["steps"][:1]
     prefix = simulate(prefix_data)
     prefix.save_checkpoint(tmp_path)
-    restarted = Simulation(resolve(wedging()))
+    restarted = Simulation(resolve_scene(wedging()))
     restarted.run(restarted.load_checkpoint(tmp_path))
     full, again = wedged.step_end_rows()["release"], restarted.step_end_rows()["release"]
     for key in ("reaction_support_A_x", "reaction_support_B_y", "tilt_deg"):

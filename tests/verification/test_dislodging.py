@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.scenarios.dislodging import frame_time, one_dof_thresholds, pull_impulse
+from femcontact.families.dislodging.pull import frame_time, one_dof_thresholds, pull_impulse
 from femcontact.solver.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
                                           pulse_integral)
 from femcontact.solver.loading import Schedule, pulse
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
 
 THESIS = Path(__file__).resolve().parents[1] / "data" / "dislodging_thesis.csv"
 
@@ -20,7 +20,7 @@ THESIS = Path(__file__).resolve().parents[1] / "data" / "dislodging_thesis.csv"
 def flat_punch_scene(steps, effects, mass, gravity=0.0, method="nitsche", mu=0.2) -> dict:
     """A rigid flat punch (20 wide, rotation held) on a 100 x 50 elastic block, coarse mesh;
     the block has no mass (quasi-static), the punch has `mass` (t)."""
-    return resolve({
+    return resolve_scene({
         "name": "punch", "dim": 2, "geometry": "block", "rigid": "indenter", "effects": effects,
         "block": {"width": 100.0, "height": 50.0}, "indenter": {"shape": "flat", "width": 20.0},
         "materials": {"block": {"E": 200000.0, "nu": 0.3, "density": 0.0}},
@@ -212,8 +212,8 @@ def test_rigid_punch_hitting_elastic_block_gains_no_energy(method):
 @pytest.fixture(scope="module")
 def wedged_peg():
     """Thesis case 1 (l_d 7, Mz 1000 N*mm), mesh resolution 0.5, wedged once for the tests below."""
-    from femcontact.scenarios.dislodging import Puller
-    from femcontact.config.scene import load_scene
+    from femcontact.families.dislodging.pull import Puller
+    from femcontact.families import load_scene
 
     scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
                        ["mesh.resolution=0.5", "dislodging.tolerance=0.02"])
@@ -272,8 +272,8 @@ def test_hard_pulls_end_at_an_event_with_an_exact_impulse(wedged_peg):
 def test_a_high_friction_peg_holds_below_and_leaves_above_its_own_pullout():
     """mu = 0.5 (l_max = 25 mm, deep inside the wedging band): the continuous pull still
     separates at the quasi-static pull-out force: 2 % under holds, 2 % over leaves."""
-    from femcontact.config.scene import load_scene
-    from femcontact.scenarios.dislodging import Puller
+    from femcontact.families import load_scene
+    from femcontact.families.dislodging.pull import Puller
 
     scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
                        ["mesh.resolution=0.5", "dislodging.tolerance=0.02", "contact.mu=0.5"])

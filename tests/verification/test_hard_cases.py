@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[2] / "scenes" / "wedging_2d.toml"

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.errors import InputError
 from femcontact.solver.stepping import Simulation
 
@@ -112,7 +112,7 @@ def test_stiff_hole_insertion_agrees_with_the_analytic_tier():
     (chamfer), 0.03 % (one point), 1.3 % (two point: the steel blocks' own compliance, which the rigid
     theory lacks, lowers the force), onset 2.546 against 2.543 mm, peak 2.021 against 2.038 N at
     3.90 against 3.88 mm; tolerances 1 %, 1 %, 3 %, one increment (0.1 mm), 3 %, 0.3 mm."""
-    from femcontact.scenarios.insertion import insertion_metrics
+    from femcontact.families.insertion.metrics import insertion_metrics
 
     scene = load_scene(SCENE,
                        ["mesh.contact_size=0.5", "mesh.size_max=3.0", "steps.0.increments=52",
@@ -168,7 +168,7 @@ def test_rounded_tip_maps_to_the_sharp_peg_with_its_tip_raised():
     from scipy.optimize import brentq
 
     from femcontact.references.whitney import two_point_tilt
-    from femcontact.scenarios.insertion import analytic_problem
+    from femcontact.families.insertion.metrics import analytic_problem
 
     d, D, rho, r = 10.0, 10.1, 0.5, 5.0
     for l_side in (2.5, 4.0, 6.0, 8.0):
@@ -190,10 +190,10 @@ def test_rounded_tip_maps_to_the_sharp_peg_with_its_tip_raised():
 
 def test_rcc_support_is_the_truss_models_linear_stiffness():
     """Model 'rcc' in 3-D: K equals the RCC truss's small-motion stiffness at its compliance centre
-    (femcontact.rcc.device.wrench, model 'linear', unit motions; device frame z down the peg: a half
+    (femcontact.families.rcc.device.wrench, model 'linear', unit motions; device frame z down the peg: a half
     turn about x, under which this diagonal K is unchanged)."""
     from femcontact.effects.compliant_support import stiffness_matrix
-    from femcontact.rcc.device import Rcc, wrench
+    from femcontact.families.rcc.device import Rcc, wrench
 
     scene = load_scene(SCENE, THREE_D + ["support.rcc={b=43.3, peg_length=25.0, theta_l=60.0, k=30.0}"])
     device = Rcc(43.3, 25.0, 60.0, 30.0)

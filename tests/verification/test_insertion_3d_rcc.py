@@ -6,7 +6,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[2] / "scenes" / "insertion_3d.toml"
@@ -17,7 +17,7 @@ COARSE = ["mesh.contact_size=1.0", "mesh.contact_zone=3.0", "steps=[{name='cross
 
 
 def run(*overrides):
-    from femcontact.scenarios.insertion import insertion_metrics
+    from femcontact.families.insertion.metrics import insertion_metrics
 
     simulation = Simulation(load_scene(SCENE, RCC + COARSE + list(overrides)), MPI.COMM_SELF)
     simulation.run()

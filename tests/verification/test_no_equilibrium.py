@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.references import two_point_statics
 from geometry.placement import peg_pose
 
@@ -49,7 +49,7 @@ def test_a_frictionless_peg_pushed_sideways_ends_without_equilibrium_and_not_wed
 def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, status):
     """Newton made to fail at every increment: below the friction the push needs (0.067) the
     run ends without equilibrium, above it the failure is the solver's and stays a failure."""
-    from femcontact.scenarios.case import run_contact
+    from femcontact.families.case import run_contact
     from femcontact.solver import newton
     from femcontact.solver.stepping import SimulationFailed
 

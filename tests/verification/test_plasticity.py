@@ -208,7 +208,7 @@ def test_wedging_below_yield_is_the_elastic_answer():
     Mises 0.9 of yield at this mesh) gives the elastic scene's reactions and pose to the solver's
     tolerance (residual 1e-6 N on forces of 7 N: 1e-6 relative; the two solve the same equations
     with different linear algebra), with PEEQ and the plastic zone exactly zero."""
-    from femcontact.config.scene import resolve
+    from femcontact.families import resolve_scene
     from femcontact.solver.stepping import Simulation
 
     base = {"name": "below_yield", "dim": 2, "geometry": "peg_in_hole", "peg": {"width": 40.0, "length": 10.0,
@@ -216,7 +216,7 @@ def test_wedging_below_yield_is_the_elastic_answer():
             "steps": [{"name": "load", "increments": 2, "force": [-5.0, 1.0]}, {"name": "release", "increments": 2}]}
     rows = {}
     for effects in (["friction", "plane_strain"], ["friction", "plane_strain", "plasticity"]):
-        simulation = Simulation(resolve({**base, "effects": effects}), MPI.COMM_SELF)
+        simulation = Simulation(resolve_scene({**base, "effects": effects}), MPI.COMM_SELF)
         simulation.run()
         rows["plasticity" in effects] = simulation.step_end_rows()["release"]
     elastic, plastic = rows[False], rows[True]

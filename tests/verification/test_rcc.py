@@ -7,10 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.rcc import device as rcc
+from femcontact.families.rcc import device as rcc
 from femcontact.cli import main
 from femcontact.errors import InputError
-from femcontact.config.scene import resolve
+from femcontact.families import resolve_scene
+from femcontact.families.rcc.case import run_case
 from femcontact.physics.rotation import rotation_numpy as rotation_zyx
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "rcc_validation.csv"
@@ -194,9 +195,9 @@ def test_cli_bad_input_exits_2_with_a_message(capsys, args):
 
 
 def test_run_case_metrics_are_flat_and_match_the_tables():
-    scene = resolve({"kind": "rcc", "rcc": {"theta_l": 70, "peg_length": 50},
+    scene = resolve_scene({"kind": "rcc", "rcc": {"theta_l": 70, "peg_length": 50},
                      "motion": {"translation": 1.0, "rotation": 0.05}})
-    result = rcc.run_case(scene)
+    result = run_case(scene)
     metrics = result["metrics"]
     assert all(isinstance(v, (float, int, bool, str)) for v in metrics.values())
     assert metrics["error_rx"] == pytest.approx(0.027678, abs=5e-5)  # table A-12, 0.05 rad
@@ -205,4 +206,4 @@ def test_run_case_metrics_are_flat_and_match_the_tables():
     assert metrics["max_rel_error"] == max(abs(metrics[f"error_{d}"]) for d in rcc.DOFS)
     assert abs(metrics["centre_z_unloaded"]) < 1e-9
     with pytest.raises(InputError, match="theta_l"):
-        resolve({"kind": "rcc", "rcc": {"theta_l": 90}})
+        resolve_scene({"kind": "rcc", "rcc": {"theta_l": 90}})

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.errors import InputError
 from femcontact.references import snap_fit as reference
 
@@ -25,7 +25,7 @@ COARSE = ["spring.count=1", "mesh.resolution=0.6"]
 
 def simulate(overrides: list[str]) -> dict:
     """Metrics of the contract scene with overrides, run in this process."""
-    from femcontact.scenarios.snap_fit import run, snap_fit_metrics
+    from femcontact.families.snap_fit.metrics import run, snap_fit_metrics
     from femcontact.solver.stepping import Simulation
 
     simulation = Simulation(load_scene(SCENE, COARSE + overrides))
@@ -158,8 +158,8 @@ def test_constant_force_nose_halves_the_taper_peak_in_the_reduced_model():
     """Whitney's constant-force nose of the taper's working length (closed form for the reduced
     model, 24 points): its insertion force stays within 12 % of the design force F over the middle
     80 % of the stroke and peaks 42 % below the 30-degree taper's at equal final contact force."""
-    from femcontact.scenarios import snap_fit_design as design
-    from femcontact.scenarios.snap_fit import reduced_model
+    from femcontact.families.snap_fit import design
+    from femcontact.families.snap_fit.metrics import reduced_model
 
     scene = load_scene(SCENE, ["spring.count=1"])
     nose = design.constant_force(scene, design.taper_stroke(scene))

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.references import snap_fit as reference
 
 SCENE = Path(__file__).parents[2] / "scenes" / "snap_fit_3d.toml"
@@ -17,7 +17,7 @@ SHORT = ["steps.0.motion.y=-0.34", "steps.0.increments=10"]  # 0.05 gap, 0.26 on
 
 
 def simulate(overrides: list[str]) -> dict:
-    from femcontact.scenarios.snap_fit import run, snap_fit_metrics
+    from femcontact.families.snap_fit.metrics import run, snap_fit_metrics
     from femcontact.solver.stepping import Simulation
 
     simulation = Simulation(load_scene(SCENE, overrides))

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.references import two_point_statics as statics
 from geometry.placement import peg_pose
 

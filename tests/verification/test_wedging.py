@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.scenarios import wedging
-from femcontact.config.scene import load_scene
+from femcontact.families.wedging import metrics as wedging
+from femcontact.families import load_scene
 
 SCENE = Path(__file__).parents[2] / "scenes" / "wedging_2d.toml"
 RESOLUTION = 0.5
@@ -20,7 +20,7 @@ YIELD = 210.0
 
 
 def run(tmp_path_factory, depth: float) -> dict:
-    from femcontact.scenarios.case import run_contact as run_scene
+    from femcontact.families.case import run_contact as run_scene
 
     scene = load_scene(SCENE, [f"peg.insertion_depth={depth}", f"mesh.resolution={RESOLUTION}"])
     return run_scene(scene, tmp_path_factory.mktemp(f"wedging_{depth:g}"))["metrics"]
@@ -120,7 +120,7 @@ THESIS_TOLERANCE = {5.0: (0.20, 0.12), 6.0: (0.30, 0.25)}  # l_d: (tilt change, 
 def thesis_cases(tmp_path_factory) -> dict:
     import csv
 
-    from femcontact.scenarios.case import run_contact as run_scene
+    from femcontact.families.case import run_contact as run_scene
 
     with open(THESIS_DATA, newline="") as stream:
         published = {float(r["insertion_depth_mm"]): r for r in csv.DictReader(stream)}

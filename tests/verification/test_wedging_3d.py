@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from femcontact.config.scene import load_scene
+from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
 SCENE = Path(__file__).parents[2] / "scenes" / "wedging_3d.toml"

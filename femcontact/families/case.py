@@ -1,0 +1,209 @@
+"""Run one case of any family and collect its metrics: what `femcontact run` calls.
+
+A scene of a family's own kind runs by the family's `run_case` (e.g. the RCC truss, a dislodging
+search); a contact scene runs through the solver (history streamed to `history.csv`, progress on
+standard error), stepped by its family's `run_steps` if it has one, then its family adds its own
+metrics. The family comes from the registry (femcontact.families).
+"""
+import math
+import time
+from pathlib import Path
+
+from femcontact import families
+from femcontact.config.scene import friction_coefficient
+from femcontact.errors import InputError
+
+
+def summary_metrics(simulation) -> dict:
+    """Flat metrics: every step-end output as '<step>.<quantity>', plus totals."""
+    metrics = {}
+    for step, row in simulation.step_end_rows().items():
+        for key, value in row.items():
+            if key != "step":
+                metrics[f"{step}.{key}"] = value
+    metrics["newton_iterations"] = sum(row["newton_iterations"] for row in simulation.history)
+    metrics["increments"] = len(simulation.history)
+    metrics["max_von_mises"] = max(row["max_von_mises"] for row in simulation.history)
+    metrics["yielded"] = any(row["yielded"] for row in simulation.history)
+    return metrics
+
+
+PRELOAD_FLOOR = 1e-3
+"""Contact force left by earlier steps, relative to the failing load, above which a preload may hold
+what a bare rigid peg cannot: the statics check then does not apply."""
+REST_FRACTION = 1e-3
+"""A peg running on under a load without equilibrium is at rest once its speed falls below this
+fraction of the largest it reached in the step."""
+
+
+def statics_verdict(simulation, index: int, load) -> dict | None:
+    """Whether `load` in step `index` has no static equilibrium: {'load', 'step', 'time',
+    'friction_needed', 'mu'} or None (it has one, or the statics do not apply).
+
+    The statics apply to a 2-D rigid peg placed in two-point contact, held by nothing but the
+    hole (no compliant support), with no preload left by earlier steps: then a load that needs
+    more friction than mu (`references.two_point_statics`) has no equilibrium (the peg slides or
+    turns out of the contacts)."""
+    from femcontact.references.peg_in_hole import l_2p
+    from femcontact.references.two_point_statics import placement_friction_needed
+
+    scene = simulation.scene
+    if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
+            or scene["peg"]["placement"] != "two_point" or "compliant_support" in scene["effects"]):
+        return None
+    step = scene["steps"][index]
+    force, couple = [float(f) for f in load.force], float(load.moment[0])
+    size = math.hypot(*force) + abs(couple) / l_2p(scene["peg"]["width"], scene["peg"]["insertion_depth"])
+    earlier = [row for row in simulation.history if row["step"] != step["name"]]
+    if not size > 0 or (earlier and max(earlier[-1]["contact_A_force"], earlier[-1]["contact_B_force"])
+                        > PRELOAD_FLOOR * size):
+        return None
+    mu = friction_coefficient(scene)
+    needed = placement_friction_needed(scene, force, couple, step["load_point"])
+    if needed is None or not needed > mu:
+        return None
+    text = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
+            f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
+            f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}")
+    return {"load": text, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+
+
+def no_equilibrium(simulation, failure) -> dict | None:
+    """Whether a quasi-static run that failed (SimulationFailed `failure`) did so because its load
+    has no static equilibrium (`statics_verdict`): the verdict with its 'reason', or None."""
+    if failure.load is None or "inertia" in simulation.scene["effects"]:
+        return None
+    verdict = statics_verdict(simulation, failure.step, failure.load)
+    if verdict is None:
+        return None  # an equilibrium exists (or the statics do not apply): the failure is the solver's
+    message = str(failure)
+    solver = message[message.find("after "):].split("; residual history")[0]  # 'after N cuts: ...'
+    return {**verdict, "reason": f"{verdict['load']}; the solver found none either ({solver})"}
+
+
+class RunOn:
+    """With inertia, a load without a static equilibrium (`statics_verdict` at the step's end load)
+    runs on dynamically until the peg leaves contact (both zones carry no force), comes to rest
+    (`REST_FRACTION`) or the step ends; then the run ends (a Simulation event) and `verdict` says
+    which ('run_on': 'left_contact', 'at_rest' or 'step_end')."""
+
+    def __init__(self, simulation):
+        self.simulation, self.verdicts, self.verdict = simulation, {}, None
+        self.previous, self.peak = None, 0.0
+
+    def __call__(self, index: int, row: dict) -> str:
+        sim = self.simulation
+        step = sim.scene["steps"][index]
+        if index not in self.verdicts:
+            self.verdicts[index] = statics_verdict(sim, index, sim.schedule.load(index, step["duration"], row["dt"]))
+            self.previous, self.peak = None, 0.0
+        verdict = self.verdicts[index]
+        if verdict is None:
+            return ""
+        speed = self._speed(row)
+        self.peak = max(self.peak, speed)
+        end = sim.schedule.start_times[index] + step["duration"]
+        if row["contact_A_force"] == 0 and row["contact_B_force"] == 0:
+            how, said = "left_contact", "the peg left contact"
+        elif self.previous is not None and self.peak > 0 and speed < REST_FRACTION * self.peak:
+            how, said = "at_rest", "the peg came to rest"
+        elif row["time"] >= end * (1 - 1e-12):
+            how, said = "step_end", "the step ended, the peg still moving"
+        else:
+            self.previous = row
+            return ""
+        self.verdict = {**verdict, "run_on": how, "run_on_time": row["time"],
+                        "reason": f"{verdict['load']}; with inertia it ran on: {said} at t = {row['time']:.6g} s"}
+        return self.verdict["reason"]
+
+    def _speed(self, row: dict) -> float:
+        """The peg's speed over the increment (mm/s): its reference point's plus its rotation's at half its width."""
+        if self.previous is None:
+            return 0.0
+        moved = math.hypot(row["rigid_x"] - self.previous["rigid_x"], row["rigid_y"] - self.previous["rigid_y"])
+        turned = abs(row["rigid_rz"] - self.previous["rigid_rz"]) * self.simulation.scene["peg"]["width"] / 2
+        return (moved + turned) / row["dt"]
+
+
+def outcome_metrics(simulation, verdict: dict) -> dict:
+    """Metrics of a run that ended without a static equilibrium: the converged increments' summary,
+    where the load lost its equilibrium, and the family's answer to it (a wedging case: not wedged)."""
+    metrics = summary_metrics(simulation) if simulation.history else {"newton_iterations": 0, "increments": 0}
+    metrics.update({"no_equilibrium_step": verdict["step"], "no_equilibrium_time": verdict["time"],
+                    "friction_needed": verdict["friction_needed"], "mu": verdict["mu"]})
+    if "run_on" in verdict:
+        metrics.update(run_on=verdict["run_on"], run_on_time=verdict["run_on_time"])
+    family = families.family_of(simulation.scene)
+    if family and family.outcome_metrics:
+        metrics.update(family.outcome_metrics(simulation.scene))
+    return metrics
+
+
+def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None, quiet: bool = True) -> dict:
+    """Run a resolved contact scene; stream history.csv, write fields.npz into case_dir.
+    `checkpoint`: also save the final state in case_dir/checkpoint; `restart`: start from
+    such a checkpoint (same first steps, same ranks) and run only the later steps. A load
+    without a static equilibrium (`no_equilibrium`) ends the run as an outcome: status
+    'no_equilibrium' with its reason, the fields of the last converged state."""
+    from mpi4py import MPI
+
+    from femcontact.outputs.fields import FieldSeries, write_fields
+    from femcontact.outputs.history import HistoryWriter
+    from femcontact.outputs.progress import Progress
+    from femcontact.solver.stepping import Simulation, SimulationFailed
+
+    if not scene["steps"]:
+        raise InputError("steps: a contact scene needs at least one step")
+    case_dir, rank = Path(case_dir), MPI.COMM_WORLD.rank
+    history = HistoryWriter(case_dir / "history.csv", rank)
+    listeners = [history] + ([] if quiet else [Progress(scene, rank=rank)])
+    verdict, series, family = None, None, families.family_of(scene)
+    try:
+        simulation = Simulation(scene, listeners=listeners)
+        first_step = simulation.load_checkpoint(restart) if restart else 0
+        if scene["outputs"]["fields"]:  # frames from here on: a restart's series begins at its checkpoint
+            series = FieldSeries(simulation, case_dir)
+            simulation.listeners.append(series)
+        if family and family.run_steps:  # e.g. a snap fit's jam ends the run as an outcome, not a failure
+            family.run_steps(simulation, first_step)
+        else:
+            run_on = RunOn(simulation)
+            if "inertia" in scene["effects"]:
+                simulation.events.append(run_on)
+            try:
+                simulation.run(first_step)
+            except SimulationFailed as failure:
+                verdict = no_equilibrium(simulation, failure)
+                if verdict is None:
+                    raise
+            verdict = verdict or run_on.verdict
+    finally:
+        for listener in listeners:
+            listener.close()
+    # a full disk stops every rank, none waits below
+    error = MPI.COMM_WORLD.bcast(history.error or (series and series.error), root=0)
+    if error is not None:
+        raise error
+    if checkpoint and verdict is None:
+        simulation.save_checkpoint(case_dir / "checkpoint")
+    start = time.perf_counter()
+    write_fields(simulation, case_dir)
+    simulation.timings["output"] += time.perf_counter() - start
+    if verdict is None:
+        metrics = {**summary_metrics(simulation), **(family.metrics(simulation) if family and family.metrics else {})}
+    else:
+        metrics = {**outcome_metrics(simulation, verdict), "wall_time_s": float(sum(simulation.timings.values()))}
+    info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
+            "effects": list(scene["effects"]), "built": simulation.problem.built,
+            "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped}
+    status = {} if verdict is None else {"status": "no_equilibrium", "reason": verdict["reason"]}
+    return {**status, "metrics": metrics, "timings": simulation.timings, "info": info}
+
+
+def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None, quiet: bool = True) -> dict:
+    """Run a resolved scene of any kind; returns {'metrics', 'timings', 'info'} (and 'status' and
+    'reason' for an outcome other than ok) or raises SimulationFailed."""
+    family = families.family_of(scene)
+    if family and family.run_case:
+        return family.run_case(scene, case_dir, checkpoint, restart)
+    return run_contact(scene, case_dir, checkpoint, restart, quiet)

@@ -1,1 +1,0 @@
-"""The remote-centre-compliance device as a 3-D pin-jointed truss, and its command line."""
