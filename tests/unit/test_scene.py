@@ -83,7 +83,7 @@ def test_solver_options_carry_every_solver_key_of_the_scene():
     from femcontact.config.scene import SOLVER
     from femcontact.config.solver import SCENE_KEYS, solver_options
 
-    scene = resolve(BASE, ["solver.rtol=1e-7", "solver.predictor='extrapolate'", "solver.petsc_options={pc_type='lu'}"])
+    scene = resolve_scene(BASE, ["solver.rtol=1e-7", "solver.predictor='extrapolate'", "solver.petsc_options={pc_type='lu'}"])
     options = solver_options(scene)
     assert set(SCENE_KEYS) == set(SOLVER)
     assert {key: getattr(options, key) for key in SOLVER} == scene["solver"]
