@@ -13,7 +13,8 @@ import math
 import tomllib
 from pathlib import Path
 
-from femcontact.config.dofs import RIGID_DOFS
+from femcontact.physics.dofs import RIGID_DOFS
+from femcontact.physics.support import stiffness_matrix
 from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
@@ -359,8 +360,6 @@ def check_contact(scene: dict) -> None:
     if problems:
         raise InputError("invalid scene:\n  " + "\n  ".join(problems) if len(problems) > 1 else problems[0])
     if "compliant_support" in effects:
-        from femcontact.effects.compliant_support import stiffness_matrix
-
         stiffness_matrix(scene)  # 'matrix': its size, symmetry and positive definiteness
     if scene["geometry"] == "peg_in_hole":
         from geometry.placement import check_peg_in_hole

@@ -12,7 +12,7 @@ from dolfinx import fem
 
 from femcontact.physics.rotation import rotation_numpy, rotation_ufl
 from femcontact.physics.signed_distance import reference_point
-from femcontact.config.dofs import RIGID_DOFS
+from femcontact.physics.dofs import RIGID_DOFS
 
 
 def mass_properties(rigid: dict, density: float, dim: int):

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from femcontact.config.dofs import RIGID_DOFS
+from femcontact.physics.dofs import RIGID_DOFS
 from femcontact.physics.rotation import rotation_numpy
 
 

@@ -97,7 +97,7 @@ def test_a_bad_stiffness_matrix_is_refused_naming_the_key():
 
 def test_rcc_support_reduces_to_the_x_z_plane():
     """The RCC design formula (the thesis, ch. 5) in 2-D: K_x = 3 k cos^2, K_z = 6 k sin^2, K_theta = k b^2 sin^2."""
-    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.physics.support import stiffness_matrix
 
     scene = load_scene(SCENE, ["support.model='rcc'", "support.rcc={b=50.0, "
                        "peg_length=50.0, theta_l=70.0, k=200.0}"])
@@ -134,7 +134,7 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
     """3-D: a cylinder in a wide round hole on the RCC (design formula, 6x6), centre at the
     reference point: q = K^-1 W for a force and a moment at C, the rotation a rotation vector
     (R = exp(q_r)), so the tip lands at C0 + q_t + R (tip0 - C0) exactly."""
-    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.physics.support import stiffness_matrix
 
     data = THREE_D + ["support.rcc.k=20.0", "support.compliance_centre=10.0", "steps.0.increments=1",
                       "steps.0.force=[3.0, -2.0, 1.0]", "steps.0.moment=[200.0, -300.0, 150.0]",
@@ -192,7 +192,7 @@ def test_rcc_support_is_the_truss_models_linear_stiffness():
     """Model 'rcc' in 3-D: K equals the RCC truss's small-motion stiffness at its compliance centre
     (femcontact.families.rcc.device.wrench, model 'linear', unit motions; device frame z down the peg: a half
     turn about x, under which this diagonal K is unchanged)."""
-    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.physics.support import stiffness_matrix
     from femcontact.families.rcc.device import Rcc, wrench
 
     scene = load_scene(SCENE, THREE_D + ["support.rcc={b=43.3, peg_length=25.0, theta_l=60.0, k=30.0}"])

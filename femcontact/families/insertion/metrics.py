@@ -127,7 +127,7 @@ def jam_depth(scene: dict, curve: dict) -> float | None:
     """First gripper depth (mm) where dFz/ds, over at least `JAM_WINDOW` of gripper travel, exceeds
     JAM_SLOPE K_x (s of the gripper: a jammed peg stops while the gripper goes on), or None. The
     window keeps cut increments (a few micrometres) from turning noise into slope."""
-    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.physics.support import stiffness_matrix
 
     limit = JAM_SLOPE * stiffness_matrix(scene)[0, 0]
     depth, Fz = curve["gripper_depth"], curve["Fz"]
@@ -201,7 +201,7 @@ def analytic_problem(scene: dict):
     side; so L_g - rho, eps0 - rho sin theta0, and depths rho cos theta0 deeper. On the chamfer
     the rounding touches elsewhere: `analytic_curve` takes the crossing from
     femcontact.references.rounded_rim instead."""
-    from femcontact.effects.compliant_support import stiffness_matrix
+    from femcontact.physics.support import stiffness_matrix
     from femcontact.references import whitney
 
     K = stiffness_matrix(scene)

@@ -1,2 +1,0 @@
-"""Measurement programs (`make bench`, `make accuracy`, `make stability`, `make plasticity`) and the
-implicit-Euler time integrator with events (`dynamics.py`)."""
