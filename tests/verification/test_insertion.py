@@ -1,5 +1,5 @@
 """The compliant support (effects/compliant_support.py) against hand calculations, and the
-insertion metrics (scenarios/insertion.py).
+insertion metrics (femcontact/families/insertion/metrics.py).
 
 The peg hangs in a wide hole (D = 14, d = 10, centred, no contact), so the support alone holds it: a load W at the
 compliance centre C displaces C by K^-1 W exactly; a force at the peg top turns the peg about C,
@@ -159,7 +159,7 @@ def test_3d_rcc_support_gives_K_inverse_W_with_finite_rotations():
 
 
 def test_rounded_tip_maps_to_the_sharp_peg_with_its_tip_raised():
-    """scenarios.insertion.analytic_problem treats a tip rounded with radius rho as the analytic tier's
+    """families.insertion.metrics.analytic_problem treats a tip rounded with radius rho as the analytic tier's
     sharp peg with its tip rho higher. Exact two-point geometry of the rounded peg (the rounding's
     centre rho from the left wall, the hole's right edge on the right side at l' from the tip), solved
     for the tilt, against the sharp tier's D = d cos theta + l sin theta at l = l' - rho: the two
