@@ -46,6 +46,9 @@ class Family:
     """Builds raw scene data in code (e.g. the Hertz benchmark at one contact-zone size)."""
     run_case: Callable[..., dict] | None = None
     """run_case(scene, case_dir, checkpoint, restart) for a scene of its own kinds; None: the contact run."""
+    prefix_omits: tuple[str, ...] = ()
+    """Scene tables read only after a study's shared steps: a shared prefix's scene leaves them out,
+    so cases that differ only in them compute their first steps once."""
     run_steps: Callable | None = None
     """run_steps(simulation, first_step): how a contact run steps through its scene, when an outcome such
     as a jam ends it (None: every step, a load without static equilibrium ending it as an outcome)."""

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Iterator
 
 from femcontact.config.scene import apply_overrides, case_id, read_toml
-from femcontact.families import plot_kinds, resolve_scene
+from femcontact.families import family_of, plot_kinds, resolve_scene
 from femcontact.config.schema import Field, TableList, get_key, set_key, validate
 from femcontact.errors import InputError
 
@@ -307,8 +307,10 @@ def attach_prefixes(cases: list[Case], shared: int, results: Path) -> None:
     for case in cases:
         if len(case.scene["steps"]) <= shared:
             continue
-        scene = {**case.scene, "steps": case.scene["steps"][:shared]}
-        scene.pop("dislodging", None)  # read only after the shared steps
+        family = family_of(case.scene)
+        omitted = family.prefix_omits if family else ()  # read only after the shared steps
+        scene = {key: value for key, value in case.scene.items() if key not in omitted}
+        scene["steps"] = case.scene["steps"][:shared]
         if "outputs" in scene:  # a filmed case shares its prefix with the others: the prefix writes no time series
             scene["outputs"] = {**scene["outputs"], "fields": False, "every": 1}
         identity = case_id(scene)

@@ -1,6 +1,7 @@
 """The family registry: a family written as one object and registered by one line is found by scene
 resolution, the case runner, the study report and `make accuracy`; nothing outside
 femcontact/families names a family."""
+import ast
 import re
 from pathlib import Path
 
@@ -93,3 +94,36 @@ def test_no_kind_is_named_outside_the_families_package():
              for path in sorted((ROOT / "femcontact").rglob("*.py")) if "families" not in path.parts
              for number, line in enumerate(path.read_text().splitlines(), 1) if pattern.search(line)]
     assert found == []
+
+
+def _code_words(path: Path) -> set[str]:
+    """The identifiers and the words of the strings of a module's code (docstrings and comments,
+    which may explain generically, left out)."""
+    tree = ast.parse(path.read_text())
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+                  and node.body and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
+    words = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
+            words |= set(re.findall(r"\w+", node.value))
+        elif isinstance(node, ast.Name):
+            words.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            words.add(node.attr)
+        elif isinstance(node, ast.alias):
+            words |= set(re.findall(r"\w+", node.name))
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            words.add(node.name)
+        elif isinstance(node, ast.arg):
+            words.add(node.arg)
+    return words
+
+
+def test_the_study_package_names_no_family():
+    """The study runner and report reach a family's knowledge (e.g. the scene tables a shared prefix
+    leaves out) through the registry only."""
+    names = {family.name for family in families.FAMILIES} | {k for family in families.FAMILIES for k in family.kinds}
+    found = {f"{path.relative_to(ROOT)}: {word}" for path in sorted((ROOT / "femcontact" / "study").rglob("*.py"))
+             for word in _code_words(path) & names}
+    assert sorted(found) == []

@@ -45,7 +45,7 @@ def _schema_sections() -> list[tuple[str, list[str], str]]:
 
 FAMILY = Family(
     name="dislodging", doc="docs/dislodging.md", kinds=("dislodging", "dislodging_methods"), resolve=scene.resolve,
-    schema_sections=_schema_sections, run_case=run_case, report=study_report,
+    schema_sections=_schema_sections, run_case=run_case, prefix_omits=("dislodging",), report=study_report,
     primary_columns=("threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "quasi_static_pullout_N",
                      "degree_of_wedging"),
     accuracy=Accuracy("femcontact.families.dislodging.accuracy:accuracy_rows",
