@@ -33,12 +33,12 @@ from pathlib import Path
 
 from femcontact.config.presets import PRESETS
 from femcontact.families import FAMILIES, Accuracy
+from femcontact.families.repository import SCENES
 from femcontact.outputs.tables import markdown_table
 from femcontact.references.richardson import richardson
 
 from benchmarks.whole_process import run_scene
 
-ROOT = Path(__file__).resolve().parents[1]
 PRESET_NAMES = ("fast", "balanced", "accurate")
 OUT = Path("results/accuracy")
 
@@ -87,7 +87,7 @@ def wedging_case(resolution: float | None, label: str, knob: str, overrides=()) 
 
     start = time.perf_counter()
     mesh = [] if resolution is None else [f"mesh.resolution={resolution}"]
-    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", [*mesh, *overrides])
+    scene = load_scene(SCENES / "wedging_2d.toml", [*mesh, *overrides])
     simulation = Simulation(scene)
     simulation.run()
     metrics = wedge_metrics(simulation)
@@ -126,7 +126,7 @@ def wedging_3d_rows() -> tuple[list[dict], list[str]]:
     rows = []
     for knob, setting, overrides in WEDGING_3D_SETTINGS:
         out = (OUT / f"wedging_3d_{setting.replace(' ', '_')}").resolve()
-        result, wall = run_scene(ROOT / "scenes" / "wedging_3d.toml", 2, out, overrides)
+        result, wall = run_scene(SCENES / "wedging_3d.toml", 2, out, overrides)
         rows.append({"knob": knob, "setting": setting, "wall_time": wall, "status": result["status"],
                      "dofs": result["info"].get("dofs"), "newton_iterations": result["info"].get("newton_iterations"),
                      "resultant": result["metrics"].get("residual_force_A")})

@@ -33,6 +33,7 @@ from mpi4py import MPI
 from femcontact.references.hertz import benchmark_half_width
 from femcontact.families import resolve_scene
 from femcontact.families.hertz import benchmark as hertz
+from femcontact.families.repository import SCENES
 from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 
@@ -40,7 +41,6 @@ from benchmarks import runner_overhead
 from benchmarks.whole_process import run_scene
 
 OUT = Path("results/bench")
-ROOT = Path(__file__).resolve().parents[1]
 GETFEM_DRIVER = Path(__file__).with_name("getfem_hertz.py")
 HERTZ_LEVELS = 4
 """Finest Hertz level L (h_c = a/(2^(L+1) + 0.5)): a/32.5."""
@@ -162,7 +162,7 @@ def wedging_case(overrides: list[str] = ()) -> dict:
     status."""
     from femcontact.families import load_scene
 
-    scene = load_scene(ROOT / "scenes" / "wedging_2d.toml", list(overrides))
+    scene = load_scene(SCENES / "wedging_2d.toml", list(overrides))
     if not overrides:
         Simulation(scene, MPI.COMM_SELF).run()  # compile the forms outside the measurement
     with counting({"residual": 0, "direction": 0}) as counts:
@@ -201,7 +201,7 @@ def _worst(case: dict) -> int:
 def wedging_3d(ranks: int = 2) -> dict:
     """The 3-D wedging case on `ranks` ranks, `mpirun ... femcontact run` as whole processes, per
     `solver.contact_update` (True: the default): wall time (s), Newton iterations, status."""
-    scene = ROOT / "scenes" / "wedging_3d.toml"
+    scene = SCENES / "wedging_3d.toml"
     out = {}
     for update in (False, True):
         case = (OUT / f"wedging_3d_{ranks}_ranks_update_{update}").resolve()

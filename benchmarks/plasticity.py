@@ -25,6 +25,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from femcontact.families import load_scene, resolve_scene
+from femcontact.families.repository import SCENES
 from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
 from geometry.measures import cell_coordinates
@@ -32,7 +33,7 @@ from geometry.measures import cell_coordinates
 from benchmarks import bench
 
 OUT = Path("results/plasticity")
-SCENE = Path(__file__).resolve().parents[1] / "scenes" / "wedging_2d.toml"
+SCENE = SCENES / "wedging_2d.toml"
 ELASTIC, PLASTIC = ["friction", "plane_strain"], ["friction", "plane_strain", "plasticity"]
 THESIS_316 = "plasticity.hardening=[[0, 210], [1, 290]]"
 CONTACT_SIZES = (0.02, 0.01, 0.005, 0.0025)

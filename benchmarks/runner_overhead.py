@@ -20,9 +20,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+from femcontact.families.repository import SCENES
 from femcontact.outputs.tables import markdown_table
 
-SCENE = Path(__file__).resolve().parents[1] / "scenes" / "wedging_2d.toml"
+SCENE = SCENES / "wedging_2d.toml"
 MU = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45)
 OVERRIDES = '[scene]\nmesh.resolution = 0.3\n"steps.0.increments" = 2\n"steps.1.increments" = 2\n'
 

@@ -30,12 +30,12 @@ import numpy as np
 from femcontact.references import two_point_statics
 from femcontact.config.scene import case_id, read_toml
 from femcontact.families import resolve_scene
+from femcontact.families.repository import SCENES
 from femcontact.config.schema import set_key
 from femcontact.io import read_result
 from femcontact.outputs.result import ANSWERS, status_counts
 from femcontact.outputs.tables import markdown_table
 
-ROOT = Path(__file__).resolve().parents[1]
 OUT = Path("results/stability")
 PEG_WIDTH = 40.0
 TIME_LIMIT = 600.0
@@ -230,8 +230,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     rows_2d, rows_3d = cases(args.count, args.count_3d, args.seed)
-    studies = [("stability", rows_2d, ROOT / "scenes" / "wedging_2d.toml", 1),
-               ("stability_3d", rows_3d, ROOT / "scenes" / "wedging_3d.toml", 2)]
+    studies = [("stability", rows_2d, SCENES / "wedging_2d.toml", 1),
+               ("stability_3d", rows_3d, SCENES / "wedging_3d.toml", 2)]
     for name, rows, scene, ranks in studies:
         if not rows:
             continue

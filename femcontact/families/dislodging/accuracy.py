@@ -20,7 +20,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     they converge monotonically, else against the finest. Wall time of a row: wedge, pull-out
     and its pulls (the wedge of mesh 0.5 is shared by the time-step rows and counted in each)."""
     from femcontact.families import load_scene
-    from femcontact.families.accuracy import ROOT
+    from femcontact.families.repository import SCENES
     from femcontact.references.richardson import richardson
 
     settings = [("time step dt_max", f"dt_max {dt * 1e3:g} ms, mesh 0.5", 0.5, dt) for dt in ACCURACY_DT]
@@ -29,7 +29,7 @@ def accuracy_rows() -> tuple[list[dict], list[str]]:
     for knob, label, resolution, dt_max in settings:
         if resolution not in pullers:
             start = time.perf_counter()
-            scene = load_scene(ROOT / "scenes" / "dislodging_2d.toml",
+            scene = load_scene(SCENES / "dislodging_2d.toml",
                                [f"mesh.resolution={resolution}", "dislodging.method=pulse",
                                 f"dislodging.tolerance={ACCURACY_TOLERANCE}"])
             pullers[resolution] = (Puller(scene, held_pullout=False), time.perf_counter() - start)

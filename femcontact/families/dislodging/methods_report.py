@@ -12,11 +12,10 @@ import csv
 import json
 from pathlib import Path
 
-from femcontact.families.accuracy import ROOT
+from femcontact.families.repository import STUDIES
 from femcontact.io import read_csv, read_result
 from femcontact.outputs.tables import markdown_table
 
-STUDIES = ROOT / "studies"
 DEGREE_COLUMNS = ["peg.width", "hole.width", "clearance_mm", "peg.insertion_depth", "contact.mu", "wedging_moment_Nmm",
                   "wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "tilt_deg", "pullout_force_N",
                   "degree_of_wedging", "degree_estimate", "pullout_rotation_held_N", "degree_of_wedging_rotation_held",

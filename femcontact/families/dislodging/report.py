@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from femcontact.families.accuracy import ROOT
+from femcontact.families.repository import ROOT
 from femcontact.io import read_csv, read_result
 from femcontact.families.dislodging.pull import pull_columns
 THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowest dislodged) in N,

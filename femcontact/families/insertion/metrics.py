@@ -311,11 +311,11 @@ def accuracy_case(label: str, knob: str, overrides=()) -> dict:
     import time
 
     from femcontact.families import load_scene
-    from femcontact.families.accuracy import ROOT
+    from femcontact.families.repository import SCENES
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
-    scene = load_scene(ROOT / "scenes" / "insertion_2d.toml", list(overrides))
+    scene = load_scene(SCENES / "insertion_2d.toml", list(overrides))
     simulation = Simulation(scene)
     simulation.run()
     curve = force_history(scene, simulation.history)

@@ -41,13 +41,13 @@ import numpy as np
 
 from femcontact.references import snap_fit as reference
 from femcontact.config.scene import friction_coefficient
-from femcontact.families.accuracy import ROOT
+from femcontact.families.repository import SCENES
 
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
 STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
-SCENE = ROOT / "scenes" / "snap_fit_2d.toml"
+SCENE = SCENES / "snap_fit_2d.toml"
 
 
 def _zones(scene: dict) -> list[str]:
