@@ -154,4 +154,4 @@ dislodging_methods_frequency: STUDY_FILE := studies/dislodging_methods_frequency
 dislodging_methods dislodging_methods_3d dislodging_methods_frequency: setup
 	@status=0; $(FEMCONTACT) study $(STUDY_FILE) $(STUDY_FLAGS) || status=$$?; \
 	  if [ $$status -gt 1 ]; then exit $$status; fi; \
-	  $(PY) -m femcontact.families.dislodging.methods_report || exit $$?; exit $$status
+	  $(PY) -m femcontact.study.gathering dislodging_methods || exit $$?; exit $$status

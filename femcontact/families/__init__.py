@@ -4,7 +4,7 @@
 `FAMILIES` lists them; everything that depends on a scene's family looks it up here: the case
 runner (`femcontact.families.case`), scene resolution (`resolve_scene`, `load_scene`: the
 contact schema of femcontact.config plus the family's own kinds), the study report (plot kinds,
-headline columns, the family's tables) and `make accuracy`. Adding a family is a package
+headline columns, the family's tables, the reports across studies) and `make accuracy`. Adding a family is a package
 `femcontact/families/NAME/` that builds its `FAMILY` and one line in `FAMILIES`.
 Importing the registry is cheap (no DOLFINx, no MPI): a family's heavy modules load when run.
 """
@@ -13,15 +13,15 @@ import json
 from femcontact.config.scene import apply_overrides, read_toml, resolve_contact
 from femcontact.errors import InputError
 from femcontact.families import dislodging, hertz, insertion, rcc, snap_fit, wedging
-from femcontact.families.family import Accuracy, Family
+from femcontact.families.family import Accuracy, Family, Gathering
 
 FAMILIES = [hertz.FAMILY, wedging.FAMILY, insertion.FAMILY, snap_fit.FAMILY, dislodging.FAMILY, rcc.FAMILY]
 
 CONTACT_PRIMARY = ("max_von_mises", "newton_iterations")
 """Headline metrics of a contact study no family's headline metrics match."""
 
-__all__ = ["Accuracy", "FAMILIES", "Family", "family_of", "load_scene", "plot_kind", "plot_kinds", "primary_columns",
-           "resolve_scene", "study_family"]
+__all__ = ["Accuracy", "FAMILIES", "Family", "Gathering", "family_of", "gatherings", "load_scene", "plot_kind",
+           "plot_kinds", "primary_columns", "resolve_scene", "study_family"]
 
 
 def _owner(kind: str) -> Family:
@@ -71,6 +71,11 @@ def plot_kind(kind: str):
 def plot_kinds() -> list[str]:
     """Every family's plot kinds, for the study file's schema."""
     return [kind for family in FAMILIES for kind in family.plots]
+
+
+def gatherings() -> dict[str, Gathering]:
+    """Every family's reports across several studies, by name."""
+    return {gathering.name: gathering for family in FAMILIES for gathering in family.gatherings}
 
 
 def primary_columns(columns) -> list[str]:

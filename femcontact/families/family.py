@@ -7,6 +7,7 @@ none of them names a family. Every field but `name` is optional: a family of con
 that adds nothing runs like any contact scene.
 """
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 
@@ -21,6 +22,17 @@ class Accuracy:
     """(error column, plot title) per Pareto plot."""
     default: bool = True
     """Measured by a plain `make accuracy`; otherwise only when named with `--problems`."""
+
+
+@dataclass(frozen=True)
+class Gathering:
+    """A report across several of the family's studies, written to results/NAME/ by
+    `python -m femcontact.study.gathering NAME` once they have run."""
+    name: str
+    studies: tuple[Path, ...]
+    """The study files it reads: the cases each file makes now, not every case directory on disk."""
+    write: Callable[[dict, Path], None]
+    """write(cases, out): `cases` {study file's stem: [(case, metrics) of its cases that ended ok]}, written into `out`."""
 
 
 @dataclass(frozen=True)
@@ -64,5 +76,7 @@ class Family:
     """report(study) -> (plots written, summary blocks shown before the case table)."""
     tables: Callable | None = None
     """tables(rows, column) -> summary blocks shown after the case table."""
+    gatherings: tuple[Gathering, ...] = ()
+    """Its reports across several of its studies."""
     accuracy: Accuracy | None = None
     """Its rows in `make accuracy`."""

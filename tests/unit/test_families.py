@@ -127,3 +127,31 @@ def test_the_study_package_names_no_family():
     found = {f"{path.relative_to(ROOT)}: {word}" for path in sorted((ROOT / "femcontact" / "study").rglob("*.py"))
              for word in _code_words(path) & names}
     assert sorted(found) == []
+
+
+def test_a_gathering_gets_the_ok_cases_its_study_files_make_now(monkeypatch, tmp_path):
+    """A report across studies sees the cases each study file makes, those that ended ok, and no
+    stale case directory of an earlier sweep."""
+    from femcontact.study import gathering
+    from femcontact.study.study_file import load_study
+
+    (tmp_path / "spring.toml").write_text('kind = "spring"\n')
+    study_file = tmp_path / "springs.toml"
+    study_file.write_text('[study]\nname = "springs"\nscene = "spring.toml"\n'
+                          '[sweep]\ngrid = { "spring.k" = [50.0, 100.0, 200.0] }\n')
+    handed = {}
+    toy = Family(name="spring", kinds=("spring",), resolve=TOY.resolve,
+                 gatherings=(families.Gathering("springs_all", (study_file,), lambda cases, out: handed.update(cases)),))
+    monkeypatch.setattr(families, "FAMILIES", [*families.FAMILIES, toy])
+    results = tmp_path / "results"
+    cases = load_study(study_file, results_root=results).cases
+    for made, status in zip(cases, ("ok", "failed", "ok")):
+        made.dir.mkdir(parents=True)
+        (made.dir / "result.json").write_text(f'{{"status": "{status}", "metrics": {{"k": {made.scene["spring"]["k"]}}}}}')
+    stale = results / "springs" / "cases" / "000000000000"
+    stale.mkdir()
+    (stale / "result.json").write_text('{"status": "ok", "metrics": {"k": 1.0}}')
+    assert gathering.main(["springs_all", "--results", str(results)]) == 0
+    assert [(made.id, metrics) for made, metrics in handed["springs"]] == [(cases[0].id, {"k": 50.0}),
+                                                                           (cases[2].id, {"k": 200.0})]
+    assert (results / "springs_all").is_dir()

@@ -2,11 +2,11 @@
 "dislodging" (the thesis' pulls and their thresholds: `pull.py`, its report `report.py`, its rows
 in `make accuracy` `accuracy.py`) and "dislodging_methods" (degree of wedging, shaking, twisting,
 pulse optimisation and the 3-D pull-out: `tasks.py`, `methods.py`, `pulse_optimisation.py`,
-`pullout_3d.py`, the report across its studies `methods_report.py`); both kinds' schemas in
-`scene.py`."""
+`pullout_3d.py`, the report across its studies `methods_report.py`, the gathering
+"dislodging_methods"); both kinds' schemas in `scene.py`."""
 from femcontact.config.schema import describe
-from femcontact.families.dislodging import scene
-from femcontact.families.family import Accuracy, Family
+from femcontact.families.dislodging import methods_report, scene
+from femcontact.families.family import Accuracy, Family, Gathering
 
 
 def run_case(resolved: dict, case_dir, checkpoint: bool = False, restart=None) -> dict:
@@ -46,6 +46,7 @@ def _schema_sections() -> list[tuple[str, list[str], str]]:
 FAMILY = Family(
     name="dislodging", doc="docs/dislodging.md", kinds=("dislodging", "dislodging_methods"), resolve=scene.resolve,
     schema_sections=_schema_sections, run_case=run_case, prefix_omits=("dislodging",), report=study_report,
+    gatherings=(Gathering("dislodging_methods", methods_report.STUDY_FILES, methods_report.write),),
     primary_columns=("threshold_force_N", "bracket_N", "impulse_at_threshold_Ns", "quasi_static_pullout_N",
                      "degree_of_wedging"),
     accuracy=Accuracy("femcontact.families.dislodging.accuracy:accuracy_rows",
