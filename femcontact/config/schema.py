@@ -212,17 +212,22 @@ def _child(node, part: str, dotted: str):
     return child
 
 
-def describe(schema: dict, prefix: str = "") -> list[str]:
-    """Markdown lines documenting a schema (used for the README's schema page)."""
-    lines = []
+DESCRIPTION = ("key", "allowed", "default", "meaning")
+"""The columns of `describe`'s rows."""
+
+
+def describe(schema: dict, prefix: str = "") -> list[tuple[str, str, str, str]]:
+    """A row per key documenting a schema (docs/scenes.md): its dotted name, what is allowed, its
+    default and its meaning, as Markdown cell texts (columns `DESCRIPTION`)."""
+    rows = []
     for key, spec in schema.items():
         name = prefix + key
         if isinstance(spec, dict):
-            lines += describe(spec, name + ".")
+            rows += describe(spec, name + ".")
         elif isinstance(spec, TableList):
-            lines.append(f"| `{name}` | array of tables | | {spec.doc} |")
-            lines += describe(spec.schema, name + "[].")
+            rows.append((f"`{name}`", "array of tables", "", spec.doc))
+            rows += describe(spec.schema, name + "[].")
         else:
             default = "required" if spec.default is REQUIRED else f"`{spec.default!r}`"
-            lines.append(f"| `{name}` | {spec.allowed()} | {default} | {spec.doc} |")
-    return lines
+            rows.append((f"`{name}`", spec.allowed(), default, spec.doc))
+    return rows

@@ -3,9 +3,10 @@
 A test checks that the checked-in page equals `scene_page()`, so the page cannot drift
 from the code.
 """
-from femcontact.config.schema import describe
+from femcontact.config.schema import DESCRIPTION, describe
 from femcontact.config.scene import contact_schema
 from femcontact.families import FAMILIES
+from femcontact.outputs.tables import markdown_table
 
 HEADER = """# Scene files
 
@@ -26,13 +27,12 @@ or is missing is one error naming the file.
 Generated from the schemas (`femcontact/config/scene.py` and the study families' in `femcontact/families/`) by
 `python -m femcontact.families.docs > docs/scenes.md`.
 """
-TABLE = ["| key | allowed | default | meaning |", "|---|---|---|---|"]
 
 
 def scene_page() -> str:
     peg = describe(contact_schema(2, "peg_in_hole"))
-    block = [line for line in describe(contact_schema(2, "block")) if line not in peg]
-    snap = [line for line in describe(contact_schema(2, "snap_fit")) if line not in peg]
+    block = [row for row in describe(contact_schema(2, "block")) if row not in peg]
+    snap = [row for row in describe(contact_schema(2, "snap_fit")) if row not in peg]
     sections = [
         ("## Contact scene, geometry = peg_in_hole (2-D shown; in 3-D `hole.kind` is `single`)", peg,
          "Example: [`scenes/wedging_2d.toml`](../scenes/wedging_2d.toml) (push, then release), "
@@ -47,7 +47,7 @@ def scene_page() -> str:
     ]
     lines = [HEADER]
     for title, rows, example in sections:
-        lines += [title, "", *TABLE, *rows, "", example, ""]
+        lines += [title, "", *markdown_table(DESCRIPTION, rows), "", example, ""]
     return "\n".join(lines)
 
 

@@ -52,8 +52,9 @@ class Family:
     """Raw scene data of one of `kinds` (overrides applied) -> the resolved scene; InputError naming the key."""
     claims: Callable[[dict], bool] | None = None
     """Whether a resolved contact scene (kind 'contact') is one of this family's (e.g. by geometry)."""
-    schema_sections: Callable[[], list[tuple[str, list[str], str]]] | None = None
-    """(title, table rows, example) of its scene keys for docs/scenes.md (femcontact.families.docs)."""
+    schema_sections: Callable[[], list[tuple[str, list[tuple], str]]] | None = None
+    """(title, table rows (`femcontact.config.schema.describe`), example) of its scene keys for docs/scenes.md
+    (femcontact.families.docs)."""
     scene_factory: Callable[..., dict] | None = None
     """Builds raw scene data in code (e.g. the Hertz benchmark at one contact-zone size)."""
     run_case: Callable[..., dict] | None = None

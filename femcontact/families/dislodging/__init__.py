@@ -30,7 +30,7 @@ def study_report(study) -> tuple[list, list[tuple]]:
     return written, thesis_report.summary_blocks(study)
 
 
-def _schema_sections() -> list[tuple[str, list[str], str]]:
+def _schema_sections() -> list[tuple[str, list[tuple], str]]:
     return [("## Dislodging scene (kind = dislodging): the `[dislodging]` table",
              describe(scene.DISLODGING, "dislodging."),
              "A 2-D peg-in-hole contact scene (the keys above) plus this table. Example: "

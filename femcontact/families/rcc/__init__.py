@@ -5,7 +5,7 @@ from femcontact.families.family import Family
 from femcontact.families.rcc import case
 
 
-def _schema_sections() -> list[tuple[str, list[str], str]]:
+def _schema_sections() -> list[tuple[str, list[tuple], str]]:
     return [("## RCC scene (kind = rcc)", describe(case.SCHEMA), "Example: [`scenes/rcc.toml`](../scenes/rcc.toml).")]
 
 
