@@ -165,7 +165,7 @@ def main() -> int:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     try:
-        import getfem  # noqa: F401
+        import getfem  # noqa: F401  (is it installed?)
     except ImportError as error:
         print(f"GetFEM's Python interface is not importable ({error}); install python3-getfem", file=sys.stderr)
         return 3

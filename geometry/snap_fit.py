@@ -44,7 +44,7 @@ class Nose:
         z = np.asarray(z, float)
         r = np.full(z.shape, self.half_width)
         for piece in self.nose_pieces:
-            (ra, za), (rb, zb) = piece[-2], piece[-1]
+            (_, za), (_, zb) = piece[-2], piece[-1]
             inside = (z >= za) & (z <= zb)
             r = np.where(inside, _piece_radius(piece, z), r)
         return r

@@ -24,7 +24,6 @@ from pathlib import Path
 
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
 from femcontact.errors import InputError
 from femcontact.io import write_npz_atomic
@@ -176,7 +175,7 @@ class FieldSeries:
         from femcontact.outputs.recorder import assemble_nodal
 
         assemble_nodal(self.nodal, self.nodal_form)
-        k, dim = self.Q.dofmap.index_map_bs, self.dim
+        k = self.Q.dofmap.index_map_bs
         values = self.nodal.x.array[: self.n_owned * k].reshape(-1, k)
         area = values[:, -1:]
         lumped = np.where(area > 0, values / np.where(area > 0, area, 1.0), 0.0)

@@ -3,7 +3,6 @@
 The wedging scene is solved on both ranks together and, on each rank alone, on
 MPI.COMM_SELF; reactions, tilt and contact forces must agree to the solver tolerance
 (residual 1e-6 N against forces of 5-10 N, so 1e-6 relative)."""
-import numpy as np
 import pytest
 from mpi4py import MPI
 

@@ -5,7 +5,6 @@ e = 0.1 against Hooke (0.5 (lambda + 2 mu) e^2) and St Venant-Kirchhoff
 (0.5 (lambda + 2 mu) (e + e^2/2)^2), plane strain, exact for P1."""
 import numpy as np
 import pytest
-import ufl
 from dolfinx import fem
 from mpi4py import MPI
 

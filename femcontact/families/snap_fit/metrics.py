@@ -88,11 +88,11 @@ def _ratio(f: dict, H: float) -> float:
 
 
 def snap_fit_metrics(simulation) -> dict:
-    from geometry.snap_fit import layout, nose_profile
+    from geometry.snap_fit import nose_profile
 
     scene, history = simulation.scene, simulation.history
     spring, mu = scene["spring"], friction_coefficient(scene)
-    nose, place = nose_profile(scene["peg"]), layout(scene)
+    nose = nose_profile(scene["peg"])
     insert = forces(scene, [row for row in history if row["step"] == "insert"])
     withdraw = forces(scene, [row for row in history if row["step"] == "withdraw"])
     out = {"insertion_depth": insert["depth"].tolist(), "insertion_force": insert["axial"].tolist(),
