@@ -1,7 +1,7 @@
 """A family's report across several of its studies: `python -m femcontact.study.gathering NAME
 [--results results]` reads the cases of the study files the family's `Gathering` NAME names (those
 each file makes now, not every case directory on disk) and hands those that ended ok to the
-family, which writes results/NAME/. `make dislodging_methods` runs it after its study.
+family, which writes results/NAME/ (the Makefile runs it after the studies).
 """
 import argparse
 from pathlib import Path
@@ -28,7 +28,8 @@ def gather(name: str, results: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m femcontact.study.gathering",
+                                     description="Write a family's report across several of its studies into RESULTS/NAME/.")
     parser.add_argument("name", choices=sorted(families.gatherings()), help="the gathering")
     parser.add_argument("--results", default="results", help="results root of its studies (default: results)")
     args = parser.parse_args(argv)
