@@ -32,7 +32,8 @@ class Gathering:
     studies: tuple[Path, ...]
     """The study files it reads: the cases each file makes now, not every case directory on disk."""
     write: Callable[[dict, Path], None]
-    """write(cases, out): `cases` {study file's stem: [(case, metrics) of its cases that ended ok]}, written into `out`."""
+    """write(cases, out): from `cases`, {study file's stem: [(case, metrics) of its cases that ended ok]},
+    the report's files written into `out`."""
 
 
 @dataclass(frozen=True)

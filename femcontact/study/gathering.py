@@ -29,7 +29,8 @@ def gather(name: str, results: Path) -> Path:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m femcontact.study.gathering",
-                                     description="Write a family's report across several of its studies into RESULTS/NAME/.")
+                                     description="Write a family's report across several of its studies "
+                                                 "into RESULTS/NAME/.")
     parser.add_argument("name", choices=sorted(families.gatherings()), help="the gathering")
     parser.add_argument("--results", default="results", help="results root of its studies (default: results)")
     args = parser.parse_args(argv)

@@ -2,6 +2,7 @@
 resolution, the case runner, the study report and `make accuracy`; nothing outside
 femcontact/families names a family."""
 import ast
+import json
 import re
 from pathlib import Path
 
@@ -140,14 +141,15 @@ def test_a_gathering_gets_the_ok_cases_its_study_files_make_now(monkeypatch, tmp
     study_file.write_text('[study]\nname = "springs"\nscene = "spring.toml"\n'
                           '[sweep]\ngrid = { "spring.k" = [50.0, 100.0, 200.0] }\n')
     handed = {}
-    toy = Family(name="spring", kinds=("spring",), resolve=TOY.resolve,
-                 gatherings=(families.Gathering("springs_all", (study_file,), lambda cases, out: handed.update(cases)),))
+    springs_all = families.Gathering("springs_all", (study_file,), lambda cases, out: handed.update(cases))
+    toy = Family(name="spring", kinds=("spring",), resolve=TOY.resolve, gatherings=(springs_all,))
     monkeypatch.setattr(families, "FAMILIES", [*families.FAMILIES, toy])
     results = tmp_path / "results"
     cases = load_study(study_file, results_root=results).cases
     for made, status in zip(cases, ("ok", "failed", "ok")):
         made.dir.mkdir(parents=True)
-        (made.dir / "result.json").write_text(f'{{"status": "{status}", "metrics": {{"k": {made.scene["spring"]["k"]}}}}}')
+        result = {"status": status, "metrics": {"k": made.scene["spring"]["k"]}}
+        (made.dir / "result.json").write_text(json.dumps(result))
     stale = results / "springs" / "cases" / "000000000000"
     stale.mkdir()
     (stale / "result.json").write_text('{"status": "ok", "metrics": {"k": 1.0}}')
