@@ -51,9 +51,9 @@ class Simulation:
         from femcontact.config.solver import solver_options
         from femcontact.outputs.recorder import Recorder
         from femcontact.solver.linear import check_petsc_options
-        from femcontact.solver.loading import Schedule
+        from femcontact.problem.loading import Schedule
         from femcontact.solver.newton import SchurNewton
-        from femcontact.solver.problem import Problem
+        from femcontact.problem.problem import Problem
         from geometry.model import build
 
         self.scene, self.timings, self.listeners = scene, {}, list(listeners)

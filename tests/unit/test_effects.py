@@ -8,7 +8,7 @@ import pytest
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.solver.problem import Problem
+from femcontact.problem.problem import Problem
 from femcontact.families import resolve_scene
 from geometry.model import build
 

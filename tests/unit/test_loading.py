@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from femcontact.families.hertz import benchmark as hertz
-from femcontact.solver.loading import pulse
+from femcontact.problem.loading import pulse
 from femcontact.families import resolve_scene
 from femcontact.solver.stepping import Simulation
 

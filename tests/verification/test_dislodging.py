@@ -11,7 +11,7 @@ import pytest
 from femcontact.families.dislodging.pull import frame_time, one_dof_thresholds, pull_impulse
 from femcontact.solver.dynamics import (DynamicSimulation, Event, increment_end, increment_marks, kinks,
                                           pulse_integral)
-from femcontact.solver.loading import Schedule, pulse
+from femcontact.problem.loading import Schedule, pulse
 from femcontact.families import resolve_scene
 
 THESIS = Path(__file__).resolve().parents[1] / "data" / "dislodging_thesis.csv"

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from femcontact.families.dislodging.pull import OBSERVE_STEP, PULL_STEP, Puller
-from femcontact.solver.loading import Schedule
+from femcontact.problem.loading import Schedule
 
 RETRIES = 2
 """A pull whose Newton iteration fails (seen while locating the opening of a twisted peg: the rigid

@@ -142,7 +142,7 @@ class Puller:
         rigid.mass, rigid.mass_matrix = rigid.mass * factor, rigid.mass_matrix * factor
 
     def _set_pull(self, force: float, method: str, frequency: float) -> None:
-        from femcontact.solver.loading import Schedule
+        from femcontact.problem.loading import Schedule
 
         sim = self.simulation
         pull = sim.scene["steps"][PULL_STEP]

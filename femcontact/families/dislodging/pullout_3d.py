@@ -13,7 +13,7 @@ import numpy as np
 
 from femcontact.families.dislodging.pull import PULL_STEP, one_dof_thresholds, wedged_simulation
 from femcontact.io import read_csv
-from femcontact.solver.loading import Schedule
+from femcontact.problem.loading import Schedule
 
 
 def contacts_on_axis(row: dict, axis: np.ndarray, dim: int) -> dict:
