@@ -42,10 +42,12 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
 
     The statics apply to a 2-D rigid peg placed in two-point contact, held by nothing but the
     hole (no compliant support), with no preload left by earlier steps: then a load that needs
-    more friction than mu (`references.two_point_statics`) has no equilibrium (the peg slides or
-    turns out of the contacts)."""
+    more friction than mu in the configuration the peg reaches (`two_point_statics.
+    reached_friction_needed`: the two-point contact if the load presses the tip corner, else
+    upright against the mouth corner's wall or the opposite lean) has no equilibrium (the peg
+    slides or rocks between the leans); 'friction_needed' is None where no friction holds it."""
     from femcontact.references.peg_in_hole import l_2p
-    from femcontact.references.two_point_statics import placement_friction_needed
+    from femcontact.references.two_point_statics import reached_friction_needed
 
     scene = simulation.scene
     if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
@@ -59,13 +61,18 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
                         > PRELOAD_FLOOR * size):
         return None
     mu = friction_coefficient(scene)
-    needed = placement_friction_needed(scene, force, couple, step["load_point"])
-    if needed is None or not needed > mu:
+    reached = reached_friction_needed(scene, force, couple, step["load_point"])
+    if reached is None or not reached[0] > mu:
         return None
+    needed, configuration = reached
+    where = "in two-point contact" if configuration == "two-point contact" else \
+        f"(it opens the tip's contact and turns the peg {configuration})"
+    holds = f"it needs mu >= {needed:.4g}" if math.isfinite(needed) else "no friction holds it there"
     text = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
-            f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
-            f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}")
-    return {"load": text, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+            f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg "
+            f"{where}: {holds}, the scene has mu = {mu:.4g}")
+    return {"load": text, "step": step["name"], "time": float(load.time),
+            "friction_needed": needed if math.isfinite(needed) else None, "mu": mu}
 
 
 def no_equilibrium(simulation, failure) -> dict | None:

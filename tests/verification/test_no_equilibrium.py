@@ -96,3 +96,24 @@ def test_with_inertia_a_push_without_equilibrium_says_the_step_ended_with_the_pe
     assert metrics["run_on_time"] == pytest.approx(0.002) and metrics["increments"] == 2
     assert metrics["friction_needed"] == pytest.approx(needed(load_scene(SCENE, INERTIA)), rel=1e-5)
     assert "the step ended, the peg still moving at t = 0.002 s" in result["reason"]
+
+
+# A push down and to the left (|Fy / Fx| = 0.56) on a peg leaning in two-point contact: the rigid
+# two-point statics hold it with mu 0.14, but only with a preload at the tip's contact, which this
+# load opens (its moment about the mouth corner turns the peg upright). Upright against the left
+# wall the load's moment cannot be balanced, so the peg turns on into the opposite lean, which the
+# load opens too: the peg rocks between the leans and slides (with inertia it slides down 0.6 mm
+# in 10 ms; docs/stability.md).
+SLIDING = ["mesh.resolution=0.35", "contact.mu=0.5002", "hole.width=40.04824", "peg.insertion_depth=5.914",
+           "materials.hole.nu=0.2924", "steps.0.force=[-3.333, -1.87]", "solver.max_cuts=2"]
+
+
+def test_a_push_that_opens_the_tip_contact_and_rocks_the_peg_ends_without_equilibrium(tmp_path):
+    scene = load_scene(SCENE, SLIDING)
+    held = two_point_statics.placement_friction_needed(scene, [-3.333, -1.87], 0.0, "peg_top")
+    assert held == pytest.approx(0.1414, abs=1e-4)  # the rigid two-point statics alone: held (mu 0.5002)
+    result = run(tmp_path, SLIDING)
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium", result["reason"]
+    assert metrics["friction_needed"] is None and metrics["wedged"] is False
+    assert "turns the peg into the opposite lean): no friction holds it there" in result["reason"]
