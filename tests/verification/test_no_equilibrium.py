@@ -117,3 +117,24 @@ def test_a_push_that_opens_the_tip_contact_and_rocks_the_peg_ends_without_equili
     assert result["status"] == "no_equilibrium", result["reason"]
     assert metrics["friction_needed"] is None and metrics["wedged"] is False
     assert "turns the peg into the opposite lean): no friction holds it there" in result["reason"]
+
+
+# A push of 76 N up and to the left on the top of a peg inserted 0.53 mm: the rigid two-point
+# statics hold it with mu 0.0097 (the scene has 0.3775), through contact forces near 2000 N on a
+# 0.53-mm lever. The elastic blocks give way under them and the load levers the peg up along the
+# walls: with inertia it leaves both contacts at 75 % of the push (docs/stability.md), and
+# pseudo-transient continuation carries it up by more than its insertion depth.
+LIFTED = ["mesh.resolution=0.35", "contact.mu=0.3775", "hole.width=40.002656", "peg.insertion_depth=0.5342",
+          "materials.hole.nu=0.3931", "steps.0.force=[-72.45, 22.27]", "steps.0.increments=1", "solver.max_cuts=0"]
+
+
+def test_a_push_that_levers_the_peg_out_of_the_hole_ends_without_equilibrium(tmp_path):
+    scene = load_scene(SCENE, LIFTED)
+    assert two_point_statics.placement_friction_needed(scene, [-72.45, 22.27], 0.0, "peg_top") < 0.01
+    result = run(tmp_path, LIFTED)
+    assert result["status"] == "no_equilibrium", result["reason"]
+    assert result["metrics"]["friction_needed"] is None and result["metrics"]["mu"] == 0.3775
+    reason = result["reason"]
+    assert "lifts the peg out of the hole: under pseudo-transient continuation it rose by " in reason
+    rise = float(reason.split("it rose by ")[1].split(" mm")[0])
+    assert rise > 0.5342
