@@ -138,3 +138,20 @@ def test_a_push_that_levers_the_peg_out_of_the_hole_ends_without_equilibrium(tmp
     assert "lifts the peg out of the hole: under pseudo-transient continuation it rose by " in reason
     rise = float(reason.split("it rose by ")[1].split(" mm")[0])
     assert rise > 0.5342
+
+
+def test_with_inertia_a_push_without_equilibrium_lifts_the_peg_to_where_it_comes_to_rest(tmp_path):
+    """The push [-5, 1] N at depth 5 needs mu >= 0.067 in two-point contact and less the shallower
+    the peg (0.050 at depth 3): with mu = 0.06, applied at once, it lifts the peg, which slows as
+    friction grows able to hold it and comes to rest higher up, where the two-point statics hold it."""
+    overrides = [*COARSE, "contact.mu=0.06", "effects=['friction', 'plane_strain', 'inertia']",
+                 "steps.0.amplitude=step", "steps.0.duration=0.03", "steps.0.increments=60"]
+    result = run(tmp_path, overrides)
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium" and metrics["run_on"] == "at_rest", result["reason"]
+    assert metrics["run_on_time"] < 0.03 and metrics["friction_needed"] > 0.06
+    rise = metrics["load.rigid_y"]
+    assert 0.5 < rise < 2.0  # mm: from depth 5 to where 0.06 suffices (about 4.3) or above
+    rested = load_scene(SCENE, [*COARSE, f"peg.insertion_depth={5.0 - rise}"])
+    assert two_point_statics.placement_friction_needed(rested, [-5.0, 1.0], 0.0, "peg_top") < 0.06
+    assert "with inertia it ran on: the peg came to rest at t = " in result["reason"]
