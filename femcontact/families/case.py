@@ -68,7 +68,8 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
     where = "in two-point contact" if configuration == "two-point contact" else \
         f"(it opens the tip's contact and turns the peg {configuration})"
     holds = f"it needs mu >= {needed:.4g}" if math.isfinite(needed) else "no friction holds it there"
-    text = f"{_load_text(step, load)} has no static equilibrium of the rigid peg {where}: {holds}, the scene has mu = {mu:.4g}"
+    text = (f"{_load_text(step, load)} has no static equilibrium of the rigid peg {where}: {holds}, "
+            f"the scene has mu = {mu:.4g}")
     return {"load": text, "step": step["name"], "time": float(load.time),
             "friction_needed": needed if math.isfinite(needed) else None, "mu": mu}
 

@@ -76,7 +76,8 @@ class Simulation:
         self.last_change = None  # (step, dt, displacement change) of the last converged increment
         self.stabilization_force = 0.0
         self.pseudo_transient_exhausted = None  # the step in which pseudo-transient continuation gave up
-        self.pseudo_travel = {}  # step index: the rigid pose's change (mm, rad) when pseudo-transient continuation gave up
+        # step index: the rigid pose's change (mm, rad) when pseudo-transient continuation gave up there
+        self.pseudo_travel = {}
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
@@ -254,7 +255,9 @@ class Simulation:
         rest is kept and its spring force reported, as in `stabilized_solve`). It gives up after
         `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton iterations (all
         `SolverOptions`), and then for the rest of the step: halving the load does not shorten
-        the way to rest."""
+        the way to rest. The body's travel when it gives up (its pose's change at the last
+        converged pseudo step, mm and rad) is kept by step in `pseudo_travel`: how far the load
+        carried it without finding rest."""
         from femcontact.solver.newton import NewtonFailure
 
         p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
