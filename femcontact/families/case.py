@@ -42,10 +42,12 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
 
     The statics apply to a 2-D rigid peg placed in two-point contact, held by nothing but the
     hole (no compliant support), with no preload left by earlier steps: then a load that needs
-    more friction than mu (`references.two_point_statics`) has no equilibrium (the peg slides or
-    turns out of the contacts)."""
+    more friction than mu in the configuration the peg reaches (`two_point_statics.
+    reached_friction_needed`: the two-point contact if the load presses the tip corner, else
+    upright against the mouth corner's wall or the opposite lean) has no equilibrium (the peg
+    slides or rocks between the leans); 'friction_needed' is None where no friction holds it."""
     from femcontact.references.peg_in_hole import l_2p
-    from femcontact.references.two_point_statics import placement_friction_needed
+    from femcontact.references.two_point_statics import reached_friction_needed
 
     scene = simulation.scene
     if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
@@ -59,21 +61,54 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
                         > PRELOAD_FLOOR * size):
         return None
     mu = friction_coefficient(scene)
-    needed = placement_friction_needed(scene, force, couple, step["load_point"])
-    if needed is None or not needed > mu:
+    reached = reached_friction_needed(scene, force, couple, step["load_point"])
+    if reached is None or not reached[0] > mu:
         return None
-    text = (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force[0]:.4g}, {force[1]:.4g}] N at "
-            f"{step['load_point']}, couple {couple:.4g} N*mm) has no static equilibrium of the rigid peg in "
-            f"two-point contact: it needs mu >= {needed:.4g}, the scene has mu = {mu:.4g}")
-    return {"load": text, "step": step["name"], "time": float(load.time), "friction_needed": needed, "mu": mu}
+    needed, configuration = reached
+    where = "in two-point contact" if configuration == "two-point contact" else \
+        f"(it opens the tip's contact and turns the peg {configuration})"
+    holds = f"it needs mu >= {needed:.4g}" if math.isfinite(needed) else "no friction holds it there"
+    text = (f"{_load_text(step, load)} has no static equilibrium of the rigid peg {where}: {holds}, "
+            f"the scene has mu = {mu:.4g}")
+    return {"load": text, "step": step["name"], "time": float(load.time),
+            "friction_needed": needed if math.isfinite(needed) else None, "mu": mu}
+
+
+def _load_text(step: dict, load) -> str:
+    """"step 'NAME' at t = ... s: the load (force [...] N at POINT, couple ... N*mm)"."""
+    force, couple = (", ".join(f"{float(value):.4g}" for value in vector) for vector in (load.force, load.moment))
+    couple = couple if len(load.moment) == 1 else f"[{couple}]"
+    return (f"step {step['name']!r} at t = {load.time:.6g} s: the load (force [{force}] N at "
+            f"{step['load_point']}, couple {couple} N*mm)")
+
+
+def lifted_out(simulation, failure) -> dict | None:
+    """Whether the solver, before the run failed, saw the load lift the peg out of the hole: under
+    pseudo-transient continuation (`Simulation.pseudo_travel`, the rigid body's travel when it gave
+    up) the peg rose along the hole's axis by more than its insertion depth without coming to rest.
+    The verdict {'load', 'step', 'time', 'friction_needed' (None), 'mu'} or None."""
+    scene = simulation.scene
+    travel = simulation.pseudo_travel.get(failure.step)
+    if (travel is None or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
+            or "compliant_support" in scene["effects"]):
+        return None
+    rise, depth = float(travel[scene["dim"] - 1]), scene["peg"]["insertion_depth"]
+    if not rise > depth:
+        return None
+    step = scene["steps"][failure.step]
+    text = (f"{_load_text(step, failure.load)} lifts the peg out of the hole: under pseudo-transient continuation "
+            f"it rose by {rise:.3g} mm, more than its insertion depth of {depth:g} mm, without coming to rest")
+    return {"load": text, "step": step["name"], "time": float(failure.load.time), "friction_needed": None,
+            "mu": friction_coefficient(scene)}
 
 
 def no_equilibrium(simulation, failure) -> dict | None:
     """Whether a quasi-static run that failed (SimulationFailed `failure`) did so because its load
-    has no static equilibrium (`statics_verdict`): the verdict with its 'reason', or None."""
+    has no static equilibrium (`statics_verdict`, or the solver saw it lift the peg out of the hole:
+    `lifted_out`): the verdict with its 'reason', or None."""
     if failure.load is None or "inertia" in simulation.scene["effects"]:
         return None
-    verdict = statics_verdict(simulation, failure.step, failure.load)
+    verdict = statics_verdict(simulation, failure.step, failure.load) or lifted_out(simulation, failure)
     if verdict is None:
         return None  # an equilibrium exists (or the statics do not apply): the failure is the solver's
     message = str(failure)

@@ -12,6 +12,12 @@ peg's preload (which can hold loads beyond this limit).
 For the peg-in-hole placement of the thesis, ch. 3 (geometry.placement, 'two_point'), contact A
 is the hole's mouth corner on the peg's side, pushing along the peg's inward side normal,
 and contact B the peg's tip corner on the opposite wall, pushed back along -x.
+
+The peg starts with unloaded contacts, so the placement holds a load only if the load presses
+contact B: a load that turns the peg about A away from B opens B (holding it would need a
+preload, as a wedged peg has). The peg then turns about A until it stands upright against A's
+wall, and from there, if that wall cannot balance the load's moment, on into the opposite lean.
+`reached_friction_needed` follows the peg through these configurations.
 """
 import numpy as np
 from scipy.optimize import nnls
@@ -52,6 +58,53 @@ def friction_needed(contacts, force, at, couple: float) -> float:
         middle = 0.5 * (low + high)
         low, high = (low, middle) if has_equilibrium(contacts, force, at, couple, middle) else (middle, high)
     return high
+
+
+def presses_tip(contacts, force, at, couple: float) -> bool:
+    """Whether the load (`force` (N) at `at` (mm) plus `couple` (N*mm)), turning the peg about the
+    first contact (the mouth corner), drives it into the second (the tip corner): the load's moment
+    about the first and the second's push have moments of opposite sign (or the load none)."""
+    (pivot, _), (tip, normal) = contacts
+    load = _wrench(np.asarray(at) - pivot, force)[2] + couple
+    push = _wrench(np.asarray(tip) - pivot, normal)[2]
+    return bool(load * push <= 0)
+
+
+def reached_friction_needed(scene: dict, force, couple: float, load_point: str) -> tuple[float, str] | None:
+    """The least mu with which the configuration a rigid peg reaches from the scene's two-point
+    placement under `force` (N) at `load_point` and `couple` (N*mm) holds it, and that
+    configuration's name (inf: none holds it at any mu); None where this model does not apply.
+
+    - 'two-point contact': the load presses the tip corner (`presses_tip`): the placement holds it
+      with `placement_friction_needed`.
+    - 'upright against the wall of contact A': the tip corner opens and the peg turns about A until
+      its flank lies on A's wall (contacts at the mouth corner and at the tip corner's height).
+    - 'into the opposite lean': that wall cannot balance the load's moment, so the peg turns on about
+      its tip until the other mouth corner meets its other flank (the placement mirrored); it holds
+      the load only if the load presses its tip corner there, else the peg rocks between the
+      leans and slides."""
+    from geometry.placement import peg_pose
+
+    if placement_friction_needed(scene, force, couple, load_point) is None:
+        return None
+    pose = peg_pose(scene)
+    lean, at = peg_in_hole_contacts(pose), pose.points[load_point]
+    if presses_tip(lean, force, at, couple):
+        return friction_needed(lean, force, at, couple), "two-point contact"
+    corner = pose.points["contact_A"]
+    tip_height = (pose.rotation.T @ (pose.points["contact_B"] - pose.origin))[1]
+    depth = scene["peg"]["insertion_depth"] - tip_height
+    wall = [(corner, np.array([1.0, 0.0])), (corner - np.array([0.0, depth]), np.array([1.0, 0.0]))]
+    local = pose.rotation.T @ (at - pose.origin)
+    upright = corner - np.array([-scene["peg"]["width"] / 2, scene["peg"]["insertion_depth"]]) + local
+    needed = friction_needed(wall, force, upright, couple)
+    if needed < float("inf"):
+        return needed, "upright against the wall of contact A"
+    mirrored_at = pose.origin + pose.rotation @ (local * np.array([-1.0, 1.0]))
+    mirrored_force = [-force[0], force[1]]
+    if presses_tip(lean, mirrored_force, mirrored_at, -couple):
+        return friction_needed(lean, mirrored_force, mirrored_at, -couple), "into the opposite lean"
+    return float("inf"), "into the opposite lean"
 
 
 def placement_friction_needed(scene: dict, force, couple: float, load_point: str) -> float | None:

@@ -76,6 +76,8 @@ class Simulation:
         self.last_change = None  # (step, dt, displacement change) of the last converged increment
         self.stabilization_force = 0.0
         self.pseudo_transient_exhausted = None  # the step in which pseudo-transient continuation gave up
+        # step index: the rigid pose's change (mm, rad) when pseudo-transient continuation gave up there
+        self.pseudo_travel = {}
         self.timings["solve"] = 0.0
         self.timings["output"] = 0.0
 
@@ -253,11 +255,14 @@ class Simulation:
         rest is kept and its spring force reported, as in `stabilized_solve`). It gives up after
         `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton iterations (all
         `SolverOptions`), and then for the rest of the step: halving the load does not shorten
-        the way to rest."""
+        the way to rest. The body's travel when it gives up (its pose's change at the last
+        converged pseudo step, mm and rad) is kept by step in `pseudo_travel`: how far the load
+        carried it without finding rest."""
         from femcontact.solver.newton import NewtonFailure
 
         p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
-        factor, floor = 1.0, 0.0
+        factor, floor, pose = 1.0, 0.0, p.rigid.values.copy()
+        travel = np.zeros_like(pose)  # the pose's change at the last converged pseudo step (mm, rad)
         try:
             while failures < options.pseudo_failures and spent < options.pseudo_iterations:
                 start = p.state()
@@ -284,11 +289,14 @@ class Simulation:
                         self.stabilization_force = force
                     return iterations
                 factor = max(factor / options.pseudo_softening, floor)
+                travel = p.rigid.values - pose
         finally:
             self.newton.stabilize(0.0)
         self.pseudo_transient_exhausted = load.step
+        self.pseudo_travel[load.step] = travel
         raise NewtonFailure(f"the rigid body did not come to rest by pseudo-transient continuation "
-                            f"({failures} failed pseudo steps, {spent} Newton iterations)", [])
+                            f"({failures} failed pseudo steps, {spent} Newton iterations; it moved by "
+                            f"{np.array2string(travel, precision=4)} (mm, rad))", [])
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""

@@ -96,3 +96,62 @@ def test_with_inertia_a_push_without_equilibrium_says_the_step_ended_with_the_pe
     assert metrics["run_on_time"] == pytest.approx(0.002) and metrics["increments"] == 2
     assert metrics["friction_needed"] == pytest.approx(needed(load_scene(SCENE, INERTIA)), rel=1e-5)
     assert "the step ended, the peg still moving at t = 0.002 s" in result["reason"]
+
+
+# A push down and to the left (|Fy / Fx| = 0.56) on a peg leaning in two-point contact: the rigid
+# two-point statics hold it with mu 0.14, but only with a preload at the tip's contact, which this
+# load opens (its moment about the mouth corner turns the peg upright). Upright against the left
+# wall the load's moment cannot be balanced, so the peg turns on into the opposite lean, which the
+# load opens too: the peg rocks between the leans and slides (with inertia it slides down 0.6 mm
+# in 10 ms; docs/stability.md).
+SLIDING = ["mesh.resolution=0.35", "contact.mu=0.5002", "hole.width=40.04824", "peg.insertion_depth=5.914",
+           "materials.hole.nu=0.2924", "steps.0.force=[-3.333, -1.87]", "solver.max_cuts=2"]
+
+
+def test_a_push_that_opens_the_tip_contact_and_rocks_the_peg_ends_without_equilibrium(tmp_path):
+    scene = load_scene(SCENE, SLIDING)
+    held = two_point_statics.placement_friction_needed(scene, [-3.333, -1.87], 0.0, "peg_top")
+    assert held == pytest.approx(0.1414, abs=1e-4)  # the rigid two-point statics alone: held (mu 0.5002)
+    result = run(tmp_path, SLIDING)
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium", result["reason"]
+    assert metrics["friction_needed"] is None and metrics["wedged"] is False
+    assert "turns the peg into the opposite lean): no friction holds it there" in result["reason"]
+
+
+# A push of 76 N up and to the left on the top of a peg inserted 0.53 mm: the rigid two-point
+# statics hold it with mu 0.0097 (the scene has 0.3775), through contact forces near 2000 N on a
+# 0.53-mm lever. The elastic blocks give way under them and the load levers the peg up along the
+# walls: with inertia it leaves both contacts at 75 % of the push (docs/stability.md), and
+# pseudo-transient continuation carries it up by more than its insertion depth.
+LIFTED = ["mesh.resolution=0.35", "contact.mu=0.3775", "hole.width=40.002656", "peg.insertion_depth=0.5342",
+          "materials.hole.nu=0.3931", "steps.0.force=[-72.45, 22.27]", "steps.0.increments=1", "solver.max_cuts=0"]
+
+
+def test_a_push_that_levers_the_peg_out_of_the_hole_ends_without_equilibrium(tmp_path):
+    scene = load_scene(SCENE, LIFTED)
+    assert two_point_statics.placement_friction_needed(scene, [-72.45, 22.27], 0.0, "peg_top") < 0.01
+    result = run(tmp_path, LIFTED)
+    assert result["status"] == "no_equilibrium", result["reason"]
+    assert result["metrics"]["friction_needed"] is None and result["metrics"]["mu"] == 0.3775
+    reason = result["reason"]
+    assert "lifts the peg out of the hole: under pseudo-transient continuation it rose by " in reason
+    rise = float(reason.split("it rose by ")[1].split(" mm")[0])
+    assert rise > 0.5342
+
+
+def test_with_inertia_a_push_without_equilibrium_lifts_the_peg_to_where_it_comes_to_rest(tmp_path):
+    """The push [-5, 1] N at depth 5 needs mu >= 0.067 in two-point contact and less the shallower
+    the peg (0.050 at depth 3): with mu = 0.06, applied at once, it lifts the peg, which slows as
+    friction grows able to hold it and comes to rest higher up, where the two-point statics hold it."""
+    overrides = [*COARSE, "contact.mu=0.06", "effects=['friction', 'plane_strain', 'inertia']",
+                 "steps.0.amplitude=step", "steps.0.duration=0.03", "steps.0.increments=60"]
+    result = run(tmp_path, overrides)
+    metrics = result["metrics"]
+    assert result["status"] == "no_equilibrium" and metrics["run_on"] == "at_rest", result["reason"]
+    assert metrics["run_on_time"] < 0.03 and metrics["friction_needed"] > 0.06
+    rise = metrics["load.rigid_y"]
+    assert 0.5 < rise < 2.0  # mm: from depth 5 to where 0.06 suffices (about 4.3) or above
+    rested = load_scene(SCENE, [*COARSE, f"peg.insertion_depth={5.0 - rise}"])
+    assert two_point_statics.placement_friction_needed(rested, [-5.0, 1.0], 0.0, "peg_top") < 0.06
+    assert "with inertia it ran on: the peg came to rest at t = " in result["reason"]

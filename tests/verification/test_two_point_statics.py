@@ -59,3 +59,42 @@ def test_loads_built_from_contact_forces_in_the_cones_have_an_equilibrium_and_th
         needed = statics.friction_needed(contacts, -force, at, couple)
         assert needed <= mu
         assert statics.friction_needed(contacts, -1e3 * force, at, 1e3 * couple) == pytest.approx(needed, rel=1e-5)
+
+
+def case_scene(mu: float, width: float, depth: float, force: list) -> dict:
+    return load_scene(SCENE, [f"contact.mu={mu}", f"hole.width={width}", f"peg.insertion_depth={depth}",
+                              f"steps.0.force={force}"])
+
+
+def test_a_load_that_presses_the_tip_corner_is_held_in_two_point_contact():
+    """The scene's push [-5, 1] N turns the peg about the mouth corner into the tip's wall: the
+    placement's own statics decide."""
+    scene = load_scene(SCENE)
+    needed, where = statics.reached_friction_needed(scene, [-5.0, 1.0], 0.0, "peg_top")
+    assert where == "two-point contact"
+    assert needed == statics.placement_friction_needed(scene, [-5.0, 1.0], 0.0, "peg_top")
+
+
+def test_a_load_that_opens_the_tip_corner_is_held_upright_against_the_wall_by_friction_alone():
+    """A push down and to the left whose moment about the mouth corner turns the peg upright: lying
+    on the left wall the peg is held by friction exactly when mu >= |Fy / Fx| (the wall's normal
+    takes Fx, friction Fy), whatever the two-point statics need (0.22 here)."""
+    force = [-8.452, -0.7945]
+    scene = case_scene(0.5115, 40.1043, 9.262, force)
+    assert statics.placement_friction_needed(scene, force, 0.0, "peg_top") == pytest.approx(0.2203, abs=1e-4)
+    needed, where = statics.reached_friction_needed(scene, force, 0.0, "peg_top")
+    assert where == "upright against the wall of contact A"
+    assert needed == pytest.approx(0.7945 / 8.452, rel=1e-5)
+
+
+def test_a_load_that_opens_both_leans_is_held_nowhere():
+    """Upright against the left wall this push's line of action passes beside the flank (its moment
+    about the flank's lower end turns the peg on); in the opposite lean its moment about the other
+    mouth corner opens that lean's tip contact: no configuration holds it at any friction."""
+    force = [-3.333, -1.87]
+    scene = case_scene(0.5002, 40.04824, 5.914, force)
+    assert statics.reached_friction_needed(scene, force, 0.0, "peg_top") == (math.inf, "into the opposite lean")
+    placed = peg_pose(scene)
+    contacts = statics.peg_in_hole_contacts(placed)
+    assert not statics.presses_tip(contacts, force, placed.points["peg_top"], 0.0)
+    assert statics.presses_tip(contacts, [-5.0, 1.0], placed.points["peg_top"], 0.0)
