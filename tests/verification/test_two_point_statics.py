@@ -1,5 +1,6 @@
 """Statics of a rigid peg in two-point contact (femcontact.references.two_point_statics) against
 the wedging condition (the thesis, ch. 3) and against contact forces built inside the friction cones."""
+import math
 from pathlib import Path
 
 import numpy as np
