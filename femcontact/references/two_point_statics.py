@@ -83,12 +83,11 @@ def reached_friction_needed(scene: dict, force, couple: float, load_point: str) 
       its tip until the other mouth corner meets its other flank (the placement mirrored); it holds
       the load only if the load presses its tip corner there, else the peg rocks between the
       leans and slides."""
-    from geometry.placement import peg_pose
-
-    if placement_friction_needed(scene, force, couple, load_point) is None:
+    placed = _placement(scene, load_point)
+    if placed is None:
         return None
-    pose = peg_pose(scene)
-    lean, at = peg_in_hole_contacts(pose), pose.points[load_point]
+    pose, at = placed
+    lean = peg_in_hole_contacts(pose)
     if presses_tip(lean, force, at, couple):
         return friction_needed(lean, force, at, couple), "two-point contact"
     corner = pose.points["contact_A"]
@@ -111,14 +110,22 @@ def placement_friction_needed(scene: dict, force, couple: float, load_point: str
     """The least mu with which a rigid peg at the scene's two-point placement holds `force` (N) at
     its named point `load_point` and `couple` (N*mm); None where this model does not apply (not
     2-D, no two-point placement, a load point the placement does not name)."""
+    placed = _placement(scene, load_point)
+    if placed is None:
+        return None
+    pose, at = placed
+    return friction_needed(peg_in_hole_contacts(pose), force, at, couple)
+
+
+def _placement(scene: dict, load_point: str):
+    """(the peg's two-point pose, the position (mm) of `load_point` on it), or None where the
+    statics do not apply (not 2-D, no two-point placement, a point the placement does not name)."""
     from geometry.placement import peg_pose
 
     if scene.get("dim") != 2 or scene.get("peg", {}).get("placement") != "two_point":
         return None
     pose = peg_pose(scene)
-    if load_point not in pose.points:
-        return None
-    return friction_needed(peg_in_hole_contacts(pose), force, pose.points[load_point], couple)
+    return (pose, pose.points[load_point]) if load_point in pose.points else None
 
 
 def peg_in_hole_contacts(pose) -> list:
