@@ -36,6 +36,12 @@ REST_FRACTION = 1e-3
 fraction of the largest it reached in the step."""
 
 
+def _free_peg_in_hole(scene: dict) -> bool:
+    """A rigid peg in a hole held by nothing but the hole (no compliant support)."""
+    return (scene["geometry"] == "peg_in_hole" and scene["rigid"] == "peg"
+            and "compliant_support" not in scene["effects"])
+
+
 def statics_verdict(simulation, index: int, load) -> dict | None:
     """Whether `load` in step `index` has no static equilibrium: {'load', 'step', 'time',
     'friction_needed', 'mu'} or None (it has one, or the statics do not apply).
@@ -50,8 +56,7 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
     from femcontact.references.two_point_statics import reached_friction_needed
 
     scene = simulation.scene
-    if (scene["dim"] != 2 or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
-            or scene["peg"]["placement"] != "two_point" or "compliant_support" in scene["effects"]):
+    if not _free_peg_in_hole(scene) or scene["dim"] != 2 or scene["peg"]["placement"] != "two_point":
         return None
     step = scene["steps"][index]
     force, couple = [float(f) for f in load.force], float(load.moment[0])
@@ -89,8 +94,7 @@ def lifted_out(simulation, failure) -> dict | None:
     The verdict {'load', 'step', 'time', 'friction_needed' (None), 'mu'} or None."""
     scene = simulation.scene
     travel = simulation.pseudo_travel.get(failure.step)
-    if (travel is None or scene["geometry"] != "peg_in_hole" or scene["rigid"] != "peg"
-            or "compliant_support" in scene["effects"]):
+    if travel is None or not _free_peg_in_hole(scene):
         return None
     rise, depth = float(travel[scene["dim"] - 1]), scene["peg"]["insertion_depth"]
     if not rise > depth:
