@@ -25,10 +25,10 @@ def resident_mb() -> float:
 def test_memory_stays_flat_over_many_increments():
     scene = load_scene(ROOT / "scenes" / "wedging_2d.toml",
                        {"steps.0.increments": 30, "steps.1.increments": 60})
-    marks = {}
+    marks = []  # resident memory (MB) after each increment
 
     def listener(row, cuts=0):
-        marks[len(marks)] = resident_mb()
+        marks.append(resident_mb())
 
     simulation = Simulation(scene, listeners=[listener])
     simulation.run()
