@@ -134,7 +134,7 @@ plasticity: setup
 accuracy: setup
 	$(PY) -m benchmarks.accuracy --with-3d
 
-# Hard cases stay stable: a seeded random sweep (40 2-D + 4 3-D cases); results/stability/stability.md
+# Hard cases stay stable: a seeded random sweep (120 2-D + 12 3-D cases); results/stability/stability.md
 stability: setup
 	$(PY) -m benchmarks.stability $(STABILITY_FLAGS)
 

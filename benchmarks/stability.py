@@ -16,7 +16,7 @@ a defect. Writes results/stability/stability.md: the cases ok, without a static 
 and failed, counted apart, the reasons of those not ok and the slowest cases; exits 1 on any
 defect.
 
-    python -m benchmarks.stability [--count 40] [--count-3d 4] [--seed 1]
+    python -m benchmarks.stability [--count 120] [--count-3d 12] [--seed 1]
 """
 import argparse
 import json
@@ -39,10 +39,17 @@ from femcontact.outputs.tables import markdown_table
 OUT = Path("results/stability")
 PEG_WIDTH = 40.0
 TIME_LIMIT = 600.0
+COUNT_2D, COUNT_3D = 120, 12  # cases of the default sweep
+RESOLUTIONS = {2: (0.35, 2.0), 3: (0.35, 0.7)}  # mesh.resolution drawn log-uniform between these
 
 
 def _round(value: float) -> float:
     return float(f"{value:.4g}")
+
+
+def _resolution(rng, dim: int) -> float:
+    low, high = RESOLUTIONS[dim]
+    return _round(10 ** rng.uniform(math.log10(low), math.log10(high)))
 
 
 def draw(rng, dim: int) -> dict:
@@ -57,7 +64,7 @@ def draw(rng, dim: int) -> dict:
             "materials.hole.nu": _round(rng.uniform(0.2, 0.499))}
     magnitude = 10 ** rng.uniform(-1, 3)  # N: four decades
     if dim == 2:
-        case["mesh.resolution"] = _round(10 ** rng.uniform(math.log10(0.35), math.log10(1.5)))
+        case["mesh.resolution"] = _resolution(rng, dim)
         if rng.uniform() < 0.75:  # a push towards -x on the peg top, within 30 deg of horizontal
             angle = math.pi + rng.uniform(-math.pi / 6, math.pi / 6)
             case["steps.0.force"] = [_round(magnitude * math.cos(angle)), _round(magnitude * math.sin(angle))]
@@ -65,7 +72,7 @@ def draw(rng, dim: int) -> dict:
             case["steps.0.force"] = []
             case["steps.0.moment"] = [_round(magnitude * depth)]
     else:
-        case["mesh.resolution"] = 0.4
+        case["mesh.resolution"] = _resolution(rng, dim)
         case["steps.0.moment"] = [0.0, _round(-magnitude * depth), 0.0]
     return case
 
@@ -224,8 +231,8 @@ def report(studies: list[tuple[str, list, Path]]) -> tuple[str, int]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.stability", description=__doc__.splitlines()[0])
-    parser.add_argument("--count", type=int, default=40, help="2-D cases")
-    parser.add_argument("--count-3d", type=int, default=4, help="3-D cases (2 ranks each)")
+    parser.add_argument("--count", type=int, default=COUNT_2D, help="2-D cases")
+    parser.add_argument("--count-3d", type=int, default=COUNT_3D, help="3-D cases (2 ranks each)")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)

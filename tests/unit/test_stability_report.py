@@ -1,5 +1,5 @@
 """`make stability`'s report: converged cases far slower than their neighbours are named."""
-from benchmarks.stability import check, slow_cases, study_report
+from benchmarks.stability import COUNT_2D, COUNT_3D, RESOLUTIONS, cases, check, slow_cases, study_report
 
 
 def case(resolution: float, seconds: float, status: str = "ok"):
@@ -48,3 +48,13 @@ def test_the_report_counts_ok_no_equilibrium_and_failed_apart():
             "equilibrium, 1 failed") in lines
     assert ("- 1 cases without one (the rigid peg slides: mu < the friction it needs): 0 ok, 1 without a static "
             "equilibrium, 0 failed") in lines
+
+
+def test_the_default_sweep_spans_the_meshes_users_reach():
+    """120 2-D cases from resolution 0.35 to 2.0 and 12 3-D cases from 0.35 to 0.7, both ends reached."""
+    rows_2d, rows_3d = cases(COUNT_2D, COUNT_3D, seed=1)
+    assert (len(rows_2d), len(rows_3d)) == (120, 12)
+    for rows, (low, high) in ((rows_2d, RESOLUTIONS[2]), (rows_3d, RESOLUTIONS[3])):
+        resolutions = [row["mesh.resolution"] for row in rows]
+        assert low * 0.999 <= min(resolutions) < low * 1.15 and high / 1.15 < max(resolutions) <= high * 1.001
+    assert cases(COUNT_2D, COUNT_3D, seed=2)[0] != rows_2d  # another seed, other cases
