@@ -217,9 +217,9 @@ def study_report(name: str, results: dict, needed: dict) -> tuple[list[str], int
     return lines, len(found)
 
 
-def report(studies: list[tuple[str, list, Path]]) -> tuple[str, int]:
-    """The report of the sweeps (name, case rows, base scene) and their number of defects."""
-    lines, defects = ["# Stability sweep", ""], 0
+def report(studies: list[tuple[str, list, Path]], command: str) -> tuple[str, int]:
+    """The report of the sweeps (name, case rows, base scene) that `command` draws, and their number of defects."""
+    lines, defects = ["# Stability sweep", "", f"`{command}`", ""], 0
     for name, rows, scene_path in studies:
         results = read_results(name, rows, scene_path)
         needed = {cid: friction_needed(scene) if scene else None for cid, (scene, _) in results.items()}
@@ -246,7 +246,8 @@ def main(argv=None) -> int:
         path.write_text(study_file(name, str(scene), rows, ranks))
         print(f"== {name}: {len(rows)} cases (seed {args.seed}), study file {path}", flush=True)
         subprocess.run([sys.executable, "-m", "femcontact", "study", str(path), "--results", str(OUT.parent)])
-    text, defects = report([(name, rows, scene) for name, rows, scene, _ in studies if rows])
+    command = f"python -m benchmarks.stability --count {args.count} --count-3d {args.count_3d} --seed {args.seed}"
+    text, defects = report([(name, rows, scene) for name, rows, scene, _ in studies if rows], command)
     (OUT / "stability.md").write_text(text)
     print(text)
     print(f"written: {OUT / 'stability.md'}")
