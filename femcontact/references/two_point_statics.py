@@ -17,7 +17,9 @@ The peg starts with unloaded contacts, so the placement holds a load only if the
 contact B: a load that turns the peg about A away from B opens B (holding it would need a
 preload, as a wedged peg has). The peg then turns about A until it stands upright against A's
 wall, and from there, if that wall cannot balance the load's moment, on into the opposite lean.
-`reached_friction_needed` follows the peg through these configurations.
+`reached_friction_needed` follows the peg through these configurations. That is the rigid peg's
+reasoning: an elastic peg can hold such a load in two-point contact, both contacts loaded
+(docs/stability.md), so a verdict drawn from it is the rigid model's, not a proof.
 """
 import numpy as np
 from scipy.optimize import nnls
