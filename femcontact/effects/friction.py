@@ -1,11 +1,20 @@
 """Coulomb friction by a return map on a stick anchor (history).
 
-Each contact node remembers its anchor: the point of the rigid body, in the rigid body's
+Each contact point remembers its anchor: the point of the rigid body, in the rigid body's
 frame, that it sticks to. The trial traction is -gamma_T times the tangential distance
 from the anchor (gamma_T = gamma_t E / h_contact, N/mm^3); it is projected on the disc of
-radius mu p (`physics.coulomb`). After each converged increment the anchor moves so that the next increment
-starts from the converged traction, so a load that is removed leaves the stuck state in
-place (and a peg that turns and slides is handled: anchors live in its frame).
+radius mu p (`physics.coulomb`). After each converged increment the anchor moves so that the
+next increment starts from the converged traction, so a load that is removed leaves the
+stuck state in place (and a peg that turns and slides is handled: anchors live in its frame).
+
+The anchors are a discontinuous field, one value per element node: the pressure p and so
+the bound mu p differ between the two facets that meet at a node (the Nitsche pressure
+uses each element's own stress), and a facet's anchor must hold that facet's traction for
+the next increment to start exactly where the last one converged. With the contact rules
+that integrate at the nodes (2-D, and 3-D P1) this holds to round-off, except at a node
+shared by two contact facets of one element, where the anchor holds their average. The field
+lives on every element (DOLFINx 0.5 has no function space on facets): d numbers per node of
+each element, in 3-D P1 about 24 per mesh vertex.
 """
 import numpy as np
 import ufl
@@ -28,8 +37,11 @@ class Friction(Effect):
 
     def build(self, problem) -> None:
         c, rigid, contact = problem.constants, problem.rigid, problem.contact
-        self.anchor = fem.Function(problem.V, name="anchor")
-        self.anchor.x.array[:] = problem.local_coordinates().reshape(-1)  # every node starts stuck
+        degree = problem.scene["mesh"]["degree"]
+        self.W = fem.VectorFunctionSpace(problem.mesh, ("DG", degree))
+        self.anchor = fem.Function(self.W, name="anchor")
+        self._position = fem.Function(problem.V)  # the nodes' local coordinates, to interpolate on W
+        self.anchor.interpolate(self._local_coordinates())  # every node starts stuck
         slip_local = contact.xi - self.anchor
         slip_local = slip_local - ufl.dot(slip_local, contact.normal_local) * contact.normal_local
         trial = -c["gamma_t"] * c["E"] / problem.model.h_contact * rigid.to_global_direction(slip_local, rigid.variable)
@@ -44,7 +56,8 @@ class Friction(Effect):
         self.stick = ufl.conditional(ufl.And(touching, stuck), 1.0, 0.0)
         self.slip = ufl.conditional(ufl.And(touching, ufl.Not(stuck)), 1.0, 0.0)
         problem.add_traction(tangential)
-        v, w = ufl.TestFunction(problem.V), ufl.TrialFunction(problem.V)
+        v, w = ufl.TestFunction(self.W), ufl.TrialFunction(self.W)
+        self.traction_form = fem.form(ufl.dot(tangential, v) * problem.ds_contact)
         self.area_form = fem.form(sum(v[k] for k in range(problem.dim)) * problem.ds_contact)
         # L2 projection onto the contact trace, for elements whose lumped areas vanish (P2 facets
         # in 3-D: a quadratic triangle's vertex functions integrate to zero); the tiny volume term
@@ -54,39 +67,44 @@ class Friction(Effect):
         self.projection = None
 
     def commit(self, dt: float) -> None:
-        """Move each node's anchor so that -gamma_T (xi - anchor) equals the converged
-        tangential traction: anchor = xi + R^T t / gamma_T. The traction per node is its
-        contact force (integral terms only) over its lumped contact area; where some contact
-        node's lumped area vanishes (P2 in 3-D), the L2 projection of the contact force on the
-        contact trace instead (`_projected_traction`)."""
+        """Move each anchor so that -gamma_T (xi - anchor) equals the converged tangential
+        traction t: anchor = xi + R^T t / gamma_T. t at an element node is its share of the
+        integral of t over the contact facets divided by its share of their area; where some
+        node's share of area vanishes (P2 in 3-D: a quadratic triangle's vertex functions
+        integrate to zero), the L2 projection of t on the anchors' space instead."""
         p = self.problem
-        vectors, force_vector = [], None
-        for form in (p.forms.residual_contact, self.area_form):
+        vectors = []
+        for form in (self.traction_form, self.area_form):
             vector = petsc.assemble_vector(form)
             vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            with vector.localForm() as local:
-                vectors.append(local.array.reshape(-1, p.dim).copy())
-            if force_vector is None:
-                force_vector = vector
-            else:
-                vector.destroy()
-        force, weight = vectors[0], vectors[1][:, :1]
-        if self.projection is None:  # decided once: the lumped areas depend only on the mesh
+            vectors.append(vector)
+        force_vector, area_vector = vectors
+        with force_vector.localForm() as force, area_vector.localForm() as area:
+            force, weight = force.array.reshape(-1, p.dim).copy(), area.array.reshape(-1, p.dim)[:, :1].copy()
+        if self.projection is None:  # decided once: the areas depend only on the mesh
             largest = p.mesh.comm.allreduce(float(np.abs(weight).max(initial=0.0)), op=MPI.MAX)
             degenerate = np.any((weight != 0) & (np.abs(weight) < 1e-9 * largest))
             self.projection = bool(p.mesh.comm.allreduce(degenerate, op=MPI.LOR))
         if self.projection:
             traction = self._projected_traction(force_vector)
         else:
-            traction = np.where(weight > 0, -force / np.where(weight > 0, weight, 1.0), 0.0)
-        force_vector.destroy()
+            traction = np.where(weight > 0, force / np.where(weight > 0, weight, 1.0), 0.0)
+        for vector in vectors:
+            vector.destroy()
         R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0
         gamma_t = float(p.constants["gamma_t"].value * p.constants["E"].value) / p.model.h_contact
-        self.anchor.x.array[:] = (p.local_coordinates() + traction @ R / gamma_t).reshape(-1)
+        self.anchor.interpolate(self._local_coordinates())
+        self.anchor.x.array[:] += (traction @ R / gamma_t).reshape(-1)
+
+    def _local_coordinates(self) -> fem.Function:
+        """The deformable body's nodes in the rigid body's frame (mm), as a function on V."""
+        self._position.x.array[:] = self.problem.local_coordinates().reshape(-1)
+        return self._position
 
     def _projected_traction(self, force_vector) -> np.ndarray:
-        """Nodal traction t (MPa, local and ghost nodes) with M t = -f, M the contact trace's mass matrix."""
+        """Traction t (MPa) at the anchors' nodes, local and ghost, with M t = F: M the contact
+        trace's mass matrix, F the integral of the converged traction."""
         p = self.problem
         matrix = petsc.assemble_matrix(self.projection_form)
         matrix.assemble()
@@ -99,7 +117,7 @@ class Friction(Effect):
         ksp.solve(force_vector, solution)
         solution.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         with solution.localForm() as local:
-            traction = -local.array.reshape(-1, p.dim).copy()
+            traction = local.array.reshape(-1, p.dim).copy()
         for item in (ksp, matrix, solution):
             item.destroy()
         return traction

@@ -38,13 +38,16 @@ LIFTED = ["mesh.resolution=0.35", "contact.mu=0.3775", "hole.width=40.002656", "
 
 
 def travel(comm):
-    """The pose change with which pseudo-transient continuation gave up (after 150 Newton
-    iterations) on a push that levers the peg out of the hole (tests/verification/test_no_equilibrium.py)."""
+    """The pose change with which pseudo-transient continuation gave up (after 120 Newton
+    iterations) on a push that levers the peg out of the hole (tests/verification/test_no_equilibrium.py).
+    Up to there 1 and 2 ranks agree to all printed digits; further on, the failing path itself
+    amplifies round-off (its line searches fall from residuals of 1e5 N to 1e2 N), and by 150
+    iterations the two travels differ by 20 %."""
     from femcontact.solver.stepping import SimulationFailed
 
     scene = load_scene(SCENE, LIFTED)
     simulation = Simulation(scene, comm)
-    simulation.options = simulation.newton.options = replace(simulation.options, pseudo_iterations=150)
+    simulation.options = simulation.newton.options = replace(simulation.options, pseudo_iterations=120)
     with pytest.raises(SimulationFailed):
         simulation.run_step(0, scene["steps"][0])
     return simulation.pseudo_travel[0]

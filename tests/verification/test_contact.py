@@ -130,6 +130,33 @@ def test_reversed_push_reverses_friction(friction_block):
     assert row["contact_top_Fx"] == pytest.approx(-MU * PRESS, rel=0.01)
 
 
+def test_committing_friction_keeps_the_converged_equilibrium():
+    """After an increment converges, friction moves its stick anchors so that the next increment
+    starts from the converged tangential traction: the residual must stay converged. A wedged
+    peg pushed down and to the left with mu = 0.246 slides on nodes whose two facets carry
+    different pressures. Measured with one anchor per node instead (the average of its two
+    facets' tractions): the residual rose from 3e-8 to 6e-8 N before the move to 73, 137, 226
+    and 261 N after it, at 25 % to 100 % of the push."""
+    data = wedging(**{"contact.mu": 0.246, "hole.width": 40.004409, "peg.insertion_depth": 2.3})
+    data["steps"] = [{"name": "load", "increments": 4, "force": [-144.8, -76.83]}]
+    simulation = Simulation(resolve_scene(data))
+    problem, newton, commit = simulation.problem, simulation.newton, simulation.problem.commit
+    residuals = []
+
+    def checked_commit(dt):
+        load = newton._assembled[0]
+        before = newton.norm(*newton.assemble_residual(load)[:2])
+        commit(dt)
+        R_u, R_r, scale = newton.assemble_residual(load)
+        tolerance = newton.options.atol + newton.options.rtol * scale + newton.roundoff()
+        residuals.append((before, newton.norm(R_u, R_r), tolerance))
+
+    problem.commit = checked_commit
+    simulation.run()
+    assert residuals and simulation.history[-1]["slip_nodes"] > 0
+    assert all(after <= tolerance for _, after, tolerance in residuals), residuals
+
+
 # -- equilibrium and the hard cases ---------------------------------------------------------
 
 @pytest.fixture(scope="module")
