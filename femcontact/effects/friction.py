@@ -80,8 +80,9 @@ class Friction(Effect):
             vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             vectors.append(vector)
         force_vector, area_vector = vectors
-        with force_vector.localForm() as force, area_vector.localForm() as area:
-            force, weight = force.array.reshape(-1, p.dim).copy(), area.array.reshape(-1, p.dim)[:, :1].copy()
+        with force_vector.localForm() as force_local, area_vector.localForm() as area_local:
+            force = force_local.array.reshape(-1, p.dim).copy()
+            weight = area_local.array.reshape(-1, p.dim)[:, :1].copy()
         if self.projection is None:  # decided once: the areas depend only on the mesh
             largest = p.mesh.comm.allreduce(float(np.abs(weight).max(initial=0.0)), op=MPI.MAX)
             degenerate = np.any((weight != 0) & (np.abs(weight) < 1e-9 * largest))

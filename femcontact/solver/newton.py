@@ -176,6 +176,11 @@ class SchurNewton:
             floor += float(np.linalg.norm((np.finfo(float).eps * spread * stiffness)[rigid.free]))
         return floor
 
+    def tolerance(self, scale: float) -> float:
+        """The residual norm (N) at which Newton stops: atol + rtol * `scale` (the largest of the
+        bulk, load and contact force norms, N) + the round-off floor."""
+        return self.options.atol + self.options.rtol * scale + self.roundoff()
+
     def stabilize(self, factor: float, tie_pose=None) -> None:
         """Switch the contact stabilisation: a spring of stiffness E * h_contact (N/mm, E the
         problem's `stiffness_scale`; rotations scaled by the body size squared) tying the rigid
@@ -213,7 +218,7 @@ class SchurNewton:
             history.append(norm)
             if not np.isfinite(norm):
                 raise NewtonFailure("residual is not finite", history)
-            if norm <= options.atol + options.rtol * scale + self.roundoff():
+            if norm <= self.tolerance(scale):
                 return iteration
             if iteration == options.max_iterations:
                 break

@@ -148,8 +148,7 @@ def test_committing_friction_keeps_the_converged_equilibrium():
         before = newton.norm(*newton.assemble_residual(load)[:2])
         commit(dt)
         R_u, R_r, scale = newton.assemble_residual(load)
-        tolerance = newton.options.atol + newton.options.rtol * scale + newton.roundoff()
-        residuals.append((before, newton.norm(R_u, R_r), tolerance))
+        residuals.append((before, newton.norm(R_u, R_r), newton.tolerance(scale)))
 
     problem.commit = checked_commit
     simulation.run()
