@@ -186,7 +186,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     'no_equilibrium' with its reason, the fields of the last converged state."""
     from mpi4py import MPI
 
-    from femcontact.outputs.fields import FieldSeries, write_fields
+    from femcontact.outputs.fields import Fields, FieldSeries, write_fields
     from femcontact.outputs.history import HistoryWriter
     from femcontact.outputs.progress import Progress
     from femcontact.solver.stepping import Simulation, SimulationFailed
@@ -200,8 +200,9 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     try:
         simulation = Simulation(scene, listeners=listeners)
         first_step = simulation.load_checkpoint(restart) if restart else 0
+        fields = Fields(simulation)  # fields.npz's contact values are those of the last increment
         if scene["outputs"]["fields"]:  # frames from here on: a restart's series begins at its checkpoint
-            series = FieldSeries(simulation, case_dir)
+            series = FieldSeries(simulation, case_dir, fields)
             simulation.listeners.append(series)
         if family and family.run_steps:  # e.g. a snap fit's jam ends the run as an outcome, not a failure
             family.run_steps(simulation, first_step)
@@ -226,7 +227,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
     if checkpoint and verdict is None:
         simulation.save_checkpoint(case_dir / "checkpoint")
     start = time.perf_counter()
-    write_fields(simulation, case_dir)
+    write_fields(simulation, case_dir, fields)
     simulation.timings["output"] += time.perf_counter() - start
     if verdict is None:
         metrics = {**summary_metrics(simulation), **(family.metrics(simulation) if family and family.metrics else {})}

@@ -125,3 +125,27 @@ def test_a_killed_run_keeps_the_frames_it_finished(tmp_path):
     assert len(frames) >= 2
     assert [t for t, _, _ in frames] == pytest.approx([0.025 * (k + 1) for k in range(len(frames))])
     assert all(set(point_data) == NODE_FIELDS for _, point_data, _ in frames)
+
+
+def test_the_final_contact_fields_integrate_to_the_contact_forces(tmp_path):
+    """fields.npz of a wedged peg: the lumped pressure and tangential traction over each zone
+    integrate to the zone's contact force in history.csv, which sums the same integrals from the
+    contact residual: equal to round-off (1e-9 relative). At this mesh one node presses in each
+    zone, so the normal is one across it. The fields are those of a frame, each node once."""
+    from wedged_fields import WEDGED, WEDGING_SCENE, contact_forces, read_fields
+
+    from femcontact.api import load_scene
+    from femcontact.outputs.history import read_history
+
+    run_contact(load_scene(WEDGING_SCENE, WEDGED), tmp_path)
+    fields = read_fields(tmp_path / "fields.npz")
+    assert set(NODE_FIELDS) | {"contact_area", "von_mises", "stress"} <= set(fields)
+    assert len(np.unique(fields["points"], axis=0)) == len(fields["points"])
+    history = read_history(tmp_path / "history.csv")
+    forces = contact_forces(fields)
+    for zone, (force, touching) in forces.items():
+        assert touching == 1
+        assert force == pytest.approx(history[f"contact_{zone}_force"][-1], rel=1e-9)
+        assert force > 5.0  # wedged: a residual force of several N per mm at both contacts
+    status = fields["contact_status"][fields["contact_pressure"] > 0]
+    assert set(status) <= {1.0, 2.0} and np.all(fields["contact_status"][fields["contact_area"] == 0] == 0)

@@ -204,7 +204,7 @@ class Puller:
         finally:
             for listener in (history, series):
                 sim.listeners.remove(listener)
-            sim.recorder.observers.remove(series.capture)
+            series.detach()
             history.close()
         error = sim.problem.mesh.comm.bcast(history.error or series.error, root=0)
         if error is not None:
