@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_methods_2d dislodging_methods_3d dislodging_methods_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study bench bench_hertz_3d accuracy stability plasticity clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d accuracy stability plasticity clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -137,6 +137,12 @@ accuracy: setup
 # Hard cases stay stable: a seeded random sweep (120 2-D + 12 3-D cases); results/stability/stability.md
 stability: setup
 	$(PY) -m benchmarks.stability $(STABILITY_FLAGS)
+
+# The measured tables of docs/ (blocks fenced by <!-- generated: results/... --> and <!-- end generated -->)
+# refreshed from the results files that name them, docs/scenes.md from the schemas; missing results
+# are listed with the target that writes them
+docs: setup
+	$(PY) -m benchmarks.docs_update
 
 clean:
 	rm -rf results

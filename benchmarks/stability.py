@@ -186,11 +186,23 @@ def read_results(name: str, rows: list[dict], scene_path: Path) -> dict:
     return results
 
 
+def defects(results: dict) -> list[tuple[str, str]]:
+    """(case id, defect) of the results ({case id: (scene, result or None)}) that have one."""
+    return [(cid, defect) for cid, (_, r) in results.items() if (defect := check(r))]
+
+
+def outcome_row(name: str, results: dict) -> list:
+    """One sweep's row of the outcomes table: cases, ok, no static equilibrium, failed, without a result, defects."""
+    counts = status_counts([r for _, r in results.values()])
+    return [name, len(results), counts["ok"], counts["no_equilibrium"], counts["failed"],
+            sum(r is None for _, r in results.values()), len(defects(results))]
+
+
 def study_report(name: str, results: dict, needed: dict) -> tuple[list[str], int]:
     """The report's section of one sweep ({case id: (scene, result or None)}; `needed`: the friction
     each case's load needs, `friction_needed`) and its number of defects."""
     answered = [r for _, r in results.values() if r and r["status"] in ANSWERS]
-    found = [(cid, defect) for cid, (_, r) in results.items() if (defect := check(r))]
+    found = defects(results)
     lines = [f"## {name}: {len(answered)} of {len(results)} answered "
              f"({100 * len(answered) / max(len(results), 1):.0f} %): {outcomes([r for _, r in results.values()])}, "
              f"{sum(r is None for _, r in results.values())} without a result; "
@@ -217,16 +229,23 @@ def study_report(name: str, results: dict, needed: dict) -> tuple[list[str], int
     return lines, len(found)
 
 
+OUTCOME_COLUMNS = ["sweep", "cases", "ok", "no static equilibrium", "failed", "without a result", "defects"]
+
+
 def report(studies: list[tuple[str, list, Path]], command: str) -> tuple[str, int]:
     """The report of the sweeps (name, case rows, base scene) that `command` draws, and their number of defects."""
-    lines, defects = ["# Stability sweep", "", f"`{command}`", ""], 0
+    sections, outcomes_rows, found = [], [], 0
     for name, rows, scene_path in studies:
         results = read_results(name, rows, scene_path)
         needed = {cid: friction_needed(scene) if scene else None for cid, (scene, _) in results.items()}
-        section, found = study_report(name, results, needed)
-        lines += section
-        defects += found
-    return "\n".join(lines), defects
+        section, defects_found = study_report(name, results, needed)
+        sections += section
+        outcomes_rows.append(outcome_row(name, results))
+        found += defects_found
+    lines = ["# Stability sweep", "", f"`{command}`", "", "## Outcomes", "",
+             f"The cases `{command}` draws, each run by the study runner:", "",
+             *markdown_table(OUTCOME_COLUMNS, outcomes_rows, align="lrrrrrr"), ""]
+    return "\n".join(lines + sections), found
 
 
 def main(argv=None) -> int:

@@ -58,3 +58,25 @@ def test_the_default_sweep_spans_the_meshes_users_reach():
         resolutions = [row["mesh.resolution"] for row in rows]
         assert low * 0.999 <= min(resolutions) < low * 1.15 and high / 1.15 < max(resolutions) <= high * 1.001
     assert cases(COUNT_2D, COUNT_3D, seed=2)[0] != rows_2d  # another seed, other cases
+
+
+def test_the_report_opens_with_one_outcomes_row_per_sweep(monkeypatch):
+    """The section `make docs` copies into docs/stability.md (benchmarks/docs_update.py)."""
+    import benchmarks.stability as stability
+    from benchmarks.docs_update import section
+
+    scene = {"mesh": {"resolution": 1.0}, "contact": {"mu": 0.5}}
+    sweeps = {"stability": {"a": (scene, answered("ok")), "c": (scene, answered("no_equilibrium", "needs mu >= 0.6")),
+                            "d": (scene, answered("failed", "SimulationFailed: step load; residual history [1.0]")),
+                            "e": (scene, None)},
+              "stability_3d": {"f": (scene, answered("ok"))}}
+    monkeypatch.setattr(stability, "read_results", lambda name, rows, scene_path: sweeps[name])
+    monkeypatch.setattr(stability, "friction_needed", lambda scene: None)
+    text, found = stability.report([("stability", [], None), ("stability_3d", [], None)], "python -m benchmarks.stability")
+    assert found == 1  # the case without a result
+    assert section(text, "Outcomes", "stability.md").strip().splitlines() == [
+        "The cases `python -m benchmarks.stability` draws, each run by the study runner:", "",
+        "| sweep | cases | ok | no static equilibrium | failed | without a result | defects |",
+        "|:---|---:|---:|---:|---:|---:|---:|",
+        "| stability | 4 | 1 | 1 | 1 | 1 | 1 |",
+        "| stability_3d | 1 | 1 | 0 | 0 | 0 | 0 |"]
