@@ -9,7 +9,8 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
 - `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
 - `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
 - `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
-  the contact vector not written as integrals (node-to-segment elements);
+  the contact vector not written as integrals (node-to-segment elements), and `point_contacts()`:
+  the same forces for the contact fields (`outputs/fields.py`);
 - `nodal_outputs()` (UFL values lumped to contact nodes, counted per row), `outputs()`
   (extra history columns) and `cell_fields()` (UFL values written per cell with the final
   fields); `load_scale()`: the size of the load it applies (N); `stiffness_scale()` and
@@ -54,6 +55,13 @@ class Effect:
 
     def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
         pass
+
+    def point_contacts(self) -> list:
+        """Point forces on the contact surface, not integrals, in the state now: (node a, node b, s,
+        f_n, f_t, stick) each, a force at s in [0, 1] along the facet a-b (this rank's local nodes),
+        normal part f_n >= 0 and tangential vector f_t (N, per mm of thickness in 2-D) on the
+        deformable body, stick: whether it sticks."""
+        return []
 
     def nodal_outputs(self) -> dict:
         return {}

@@ -142,18 +142,17 @@ class RigidCorners(Effect):
         best = distance[np.arange(n), rows]
         return best, np.where(np.isfinite(best), rows, -1)
 
-    def contributions(self, with_jacobian: bool):
-        """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""
+    def _pressing(self):
+        """Each touching corner this rank owns: (k, (a, b, c) segment nodes, force on the corner,
+        s, gap, state, f_t), from `_force`."""
         p = self.problem
         u = p.u.x.array
         comm = p.mesh.comm
-        out = []
         corners = self._placed()
         distances, rows = self._find(corners, u)
         owners = np.zeros(len(rows), dtype=int)
         if comm.size > 1:
             owners = np.argmin(np.array(comm.allgather(distances)).reshape(comm.size, -1), axis=0)
-        self.active[:] = False
         for k, row in enumerate(rows):
             if comm.rank != owners[k] or row < 0:
                 continue
@@ -162,8 +161,14 @@ class RigidCorners(Effect):
                                  self.coordinates[b] + self.u_old[2 * b: 2 * b + 2])
             xa, xb, xc = (self.coordinates[i] + u[2 * i: 2 * i + 2] for i in (a, b, c))
             force, s, gap, state, f_t = self._force(k, corners[k], xa, xb, xc)
-            if not state[0]:
-                continue
+            if state[0]:
+                yield k, (a, b, c), force, s, gap, state, f_t
+
+    def contributions(self, with_jacobian: bool):
+        """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""
+        out = []
+        self.active[:] = False
+        for k, (a, b, c), force, s, gap, state, f_t in self._pressing():
             self.active[k] = gap < 0  # pressing (a touching corner adds only its stiffness)
             self.tangential[k] = f_t
             dofs = np.array([2 * a, 2 * a + 1, 2 * b, 2 * b + 1], dtype=np.int32)
@@ -172,8 +177,20 @@ class RigidCorners(Effect):
             if with_jacobian:
                 dC_du, dC_dr = self._derivatives(k, (a, b, c), state)
             out.append((dofs, entries, dC_du, dC_dr))
-        active = comm.allreduce(int(self.active.sum()), op=MPI.SUM)
+        active = self.problem.mesh.comm.allreduce(int(self.active.sum()), op=MPI.SUM)
         return out, active
+
+    def point_contacts(self) -> list:
+        """The pressing corners' forces on the deformable body (the hook's tuple); collective."""
+        out = []
+        for _, (a, b, _), force, s, gap, state, _ in self._pressing():
+            if gap < 0:
+                xa, xb = (self.coordinates[i] + self.problem.u.x.array[2 * i: 2 * i + 2] for i in (a, b))
+                normal = np.array([xb[1] - xa[1], xa[0] - xb[0]]) / np.linalg.norm(xb - xa)
+                on_body = -force  # the corner pushes the body as the body pushes it back
+                f_n = abs(on_body @ normal)
+                out.append((a, b, s, f_n, on_body - (on_body @ normal) * normal, bool(state[1])))
+        return out
 
     def _derivatives(self, k, nodes, state, h=1e-9):
         """Central differences of the C entries in the 4 segment dofs and the rigid dofs."""

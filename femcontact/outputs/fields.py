@@ -11,7 +11,9 @@ on the deformable body's P1 nodes and cells, in its reference configuration:
   tangential motion relative to the rigid body since the step began; 0 where open), gap (mm, signed distance to the rigid body),
   all per node: contact values are lumped on the contact surface's nodes (integral of the value
   times the node's hat function over the contact surface, divided by the integral of the hat
-  function: the node's area) and 0 elsewhere;
+  function: the node's area; a point force, a sharp rigid corner's, is shared between the two
+  nodes of the facet it presses as their hat functions share it) and 0 elsewhere; a node sticks
+  where most of its contact force sticks;
   the effects' cell fields (M, cellwise), e.g. `peeq` (equivalent plastic strain) with `plasticity`.
 
 fields.npz: those arrays (vectors N x 3, zero-padded in 2-D; stress M x 9) of the last converged
@@ -69,7 +71,9 @@ class Fields:
         traction, normal = p.traction, contact.normal
         tangential = traction - ufl.dot(traction, normal) * normal
         friction = [component for component in p.components if component.name == "friction"]
-        stick_slip = list(friction[0].nodal_outputs().values()) if friction else [0.0, 0.0]
+        # stick and slip weighted by the pressure: a node sticks where most of its contact force sticks
+        stick_slip = [contact.pressure * value for value in friction[0].nodal_outputs().values()] if friction \
+            else [0.0, 0.0]
         values = [contact.pressure, contact.gap, *stick_slip, *[tangential[k] for k in range(dim)],
                   *[contact.xi[k] for k in range(dim)], *[contact.normal_local[k] for k in range(dim)], 1.0]
         self.friction = bool(friction)
@@ -115,7 +119,7 @@ class Fields:
         """This rank's owned nodes: lumped contact values, the local position xi and normal, the area."""
         from femcontact.outputs.recorder import assemble_nodal
 
-        assemble_nodal(self.nodal, self.nodal_form)
+        assemble_nodal(self.nodal, self.nodal_form, self._add_point_contacts)
         k = self.Q.dofmap.index_map_bs
         values = self.nodal.x.array[: self.n_owned * k].reshape(-1, k)
         area = values[:, -1:]
@@ -128,6 +132,20 @@ class Fields:
         normal = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
         return {"contact_pressure": pressure, "gap": gap, "contact_status": status,
                 "tangential_traction": _pad(tangential), "xi": xi, "normal": normal, "contact_area": area[:, 0]}
+
+    def _add_point_contacts(self, array: np.ndarray) -> None:
+        """The effects' point forces (a sharp rigid corner's) added to the nodal integrals of the
+        local array: a force F at s along the facet a-b adds (1 - s) F to node a and s F to node b,
+        as the integral of a point load times the nodes' hat functions; its normal part to the
+        pressure and to the stick or the slip weight, its tangential part to the traction."""
+        k, dim = self.Q.dofmap.index_map_bs, self.dim
+        rows = array.reshape(-1, k)
+        for component in self.problem.components:
+            for a, b, s, f_n, f_t, stick in component.point_contacts():
+                for node, share in ((a, 1 - s), (b, s)):
+                    rows[node, 0] += share * f_n
+                    rows[node, 2 if stick else 3] += share * f_n
+                    rows[node, 4: 4 + dim] += share * np.asarray(f_t)
 
     def capture(self) -> None:
         """The contact values of a converged increment, read before it is committed."""

@@ -144,8 +144,9 @@ class Recorder:
         return row
 
 
-def assemble_nodal(function, form) -> None:
-    """Assemble the vector `form` into `function`, each node's sum over every rank (its ghosts too)."""
+def assemble_nodal(function, form, add=None) -> None:
+    """Assemble the vector `form` into `function`, each node's sum over every rank (its ghosts too);
+    `add(array)`: adds this rank's entries that are not integrals to the local array first."""
     from dolfinx.fem import petsc
     from petsc4py import PETSc
 
@@ -153,6 +154,9 @@ def assemble_nodal(function, form) -> None:
     with vec.localForm() as local:
         local.set(0.0)
     petsc.assemble_vector(vec, form)
+    if add is not None:
+        with vec.localForm() as local:
+            add(local.array)
     vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
 
 

@@ -84,5 +84,5 @@ def test_two_ranks_write_the_final_fields_of_one():
             one, other = parallel[name][order], serial[name][serial_order]
             assert np.abs(one - other).max() <= 1e-6 * max(np.abs(other).max(), 1e-12), name
         for zone, (force, touching) in contact_forces(parallel).items():
-            assert touching == 1 and force == pytest.approx(row[f"contact_{zone}_force"], rel=1e-9)
+            assert touching >= 1 and force == pytest.approx(row[f"contact_{zone}_force"], rel=1e-9)
     MPI.COMM_WORLD.barrier()

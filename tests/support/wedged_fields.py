@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 
 WEDGING_SCENE = Path(__file__).resolve().parents[2] / "scenes" / "wedging_2d.toml"
-WEDGED = {"mesh.resolution": 0.5, "peg.corner_radius": 0.5}
-"""The wedging scene on a coarse mesh, the peg's corners rounded: both contact zones press through
-the contact integral (a sharp rigid corner's force is a point force, outside the contact fields:
-docs/limitations.md)."""
+WEDGED = {"mesh.resolution": 0.5}
+"""The wedging scene on a coarse mesh: block A's corner presses the peg's flat side (the contact
+integral), the peg's sharp corner presses wall B (a point force shared by the two nodes of the
+facet it touches)."""
 
 
 def read_fields(path) -> dict:
@@ -20,7 +20,8 @@ def contact_forces(fields: dict) -> dict:
     """Per zone (A: x < 0, B: x > 0): (magnitude of the force the lumped contact fields integrate
     to (N/mm), touching nodes). The sum over the zone's nodes of area x pressure is the normal
     force and of area x tangential traction the tangential force, exactly (the hat functions sum
-    to 1); their magnitude is |F| when the normal is one across the zone's touching nodes."""
+    to 1, and a point force is shared as its hat functions share it); their magnitude is |F| when
+    the normal is one across the zone's touching nodes."""
     x, area = fields["points"], fields["contact_area"]
     out = {}
     for zone, where in (("A", x[:, 0] < 0), ("B", x[:, 0] > 0)):
