@@ -1,4 +1,5 @@
-"""Off-screen PNG of von Mises stress on the deformed shape (pyvista + matplotlib), 2-D and 3-D.
+"""Off-screen PNG of von Mises stress (or another field of FIELDS, e.g. the contact pressure) on the
+deformed shape (pyvista + matplotlib), 2-D and 3-D.
 
 Input: a case's `fields.npz`, written by the solver (rank 0, gathered P1 data):
   points        (N, 3) reference coordinates of the mesh nodes (z = 0 in 2-D)
@@ -6,6 +7,7 @@ Input: a case's `fields.npz`, written by the solver (rank 0, gathered P1 data):
   cell_type     "triangle" or "tetra"
   displacement  (N, 3) nodal displacement, zero-padded in 2-D
   von_mises     (N,) nodal or (M,) cellwise von Mises stress (nodal when N == M)
+  contact_pressure (N,) optional, nodal (fields.npz has it, with the other contact fields)
   rigid_outline (P, 3) optional polyline of the rigid body in its final pose
   named_point_names (K,), named_point_coords (K, 3)  optional points a zoom may name
 
@@ -25,6 +27,8 @@ import numpy as np
 CELL_TYPES = {"triangle": 5, "tetra": 10}  # VTK_TRIANGLE, VTK_TETRA
 PERCENTILE = 99.0
 CMAP = "jet"
+FIELDS = {"von_mises": "von Mises stress", "contact_pressure": "contact pressure"}
+"""The fields a picture may show (MPa), by their name in the fields file."""
 
 
 def load(path) -> dict:
@@ -53,13 +57,13 @@ def zoom_box(fields: dict, zoom, radius: float = 0.0):
     return np.array(list(centre) + [0.0] * (3 - len(centre))), float(r)
 
 
-def peak(fields: dict) -> dict:
-    """The largest von Mises value (MPa), where it is (reference coordinates of the node or cell
+def peak(fields: dict, field: str = "von_mises") -> dict:
+    """The largest value of `field` (MPa), where it is (reference coordinates of the node or cell
     centroid, mm) and the nearest named point with its distance (mm), if the file names points."""
-    von_mises, points = fields["von_mises"], fields["points"]
-    index = int(np.argmax(von_mises))
-    where = points[index] if len(von_mises) == len(points) else points[fields["cells"][index]].mean(axis=0)
-    out = {"value": float(von_mises[index]), "at": where, "near": None, "distance": None}
+    values, points = fields[field], fields["points"]
+    index = int(np.argmax(values))
+    where = points[index] if len(values) == len(points) else points[fields["cells"][index]].mean(axis=0)
+    out = {"value": float(values[index]), "at": where, "near": None, "distance": None}
     names = [str(name) for name in fields.get("named_point_names", [])]
     if names:
         distances = np.linalg.norm(fields["named_point_coords"] - where, axis=1)
@@ -67,8 +71,8 @@ def peak(fields: dict) -> dict:
     return out
 
 
-def measures(fields: dict) -> np.ndarray:
-    """Area (triangles, mm^2) or volume (tetrahedra, mm^3) of each von Mises value's share of the body:
+def measures(fields: dict, field: str = "von_mises") -> np.ndarray:
+    """Area (triangles, mm^2) or volume (tetrahedra, mm^3) of each value's share of the body:
     the cell's own for cellwise values, a third (a quarter) of each adjacent cell's for nodal values."""
     points, cells = fields["points"], fields["cells"]
     edges = points[cells[:, 1:]] - points[cells[:, :1]]
@@ -76,7 +80,7 @@ def measures(fields: dict) -> np.ndarray:
         size = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     else:
         size = np.abs(np.linalg.det(edges)) / 6
-    if len(fields["von_mises"]) == len(cells) and len(cells) != len(points):
+    if len(fields[field]) == len(cells) and len(cells) != len(points):
         return size
     nodal = np.zeros(len(points))
     np.add.at(nodal, cells.ravel(), np.repeat(size / cells.shape[1], cells.shape[1]))
@@ -90,9 +94,9 @@ def weighted_percentile(values: np.ndarray, weights: np.ndarray, percentile: flo
     return float(values[order][np.searchsorted(cumulative, percentile / 100 * cumulative[-1])])
 
 
-def colour_range(fields: dict, percentile: float, region=None) -> tuple[float, float]:
-    """(min, weighted percentile) of von Mises over the body, or over a zoom region (centre, radius)."""
-    values, weights = fields["von_mises"], measures(fields)
+def colour_range(fields: dict, percentile: float, region=None, field: str = "von_mises") -> tuple[float, float]:
+    """(min, weighted percentile) of `field` over the body, or over a zoom region (centre, radius)."""
+    values, weights = fields[field], measures(fields, field)
     if region is not None:
         centre, radius = region
         where = fields["points"] if len(values) == len(fields["points"]) else \
@@ -122,9 +126,11 @@ def _quiet_offscreen() -> None:
 
 
 def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, size=(1600, 700),
-           percentile=PERCENTILE) -> dict:
-    """Write the PNG (whole body; beside it the zoom, when given). Returns {'ranges': [(min, max) of
-    each view's colour map as rendered], 'peak': peak(fields)}."""
+           percentile=PERCENTILE, field="von_mises") -> dict:
+    """Write the PNG of `field` (a key of FIELDS; whole body, beside it the zoom, when given). Returns
+    {'ranges': [(min, max) of each view's colour map as rendered], 'peak': peak(fields, field)}."""
+    if field not in FIELDS:
+        raise ValueError(f"field {field!r}: expected one of {', '.join(FIELDS)}")
     _quiet_offscreen()
     import matplotlib
 
@@ -133,18 +139,20 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
     import pyvista
 
     fields = load(fields_npz_path)
+    if field not in fields:
+        raise ValueError(f"{fields_npz_path}: no {field} (a fields.npz written without contact fields)")
     points, cells = fields["points"], fields["cells"]
     flat = np.hstack([np.full((len(cells), 1), cells.shape[1]), cells]).ravel()
     grid = pyvista.UnstructuredGrid(flat, np.full(len(cells), CELL_TYPES[str(fields["cell_type"])]),
                                     points + scale * fields["displacement"])
-    von_mises = fields["von_mises"]
-    (grid.point_data if len(von_mises) == len(points) else grid.cell_data)["von Mises"] = von_mises
+    values, name = fields[field], FIELDS[field]
+    (grid.point_data if len(values) == len(points) else grid.cell_data)[name] = values
     plane = bool(np.allclose(points[:, 2], 0))
     views = [None] if zoom is None else [None, zoom_box(fields, zoom, zoom_radius)]
     images, ranges = [], []
     for view in views:
         plotter = pyvista.Plotter(off_screen=True, window_size=(size[0] // len(views), size[1]))
-        actor = plotter.add_mesh(grid, scalars="von Mises", clim=colour_range(fields, percentile, view), cmap=CMAP,
+        actor = plotter.add_mesh(grid, scalars=name, clim=colour_range(fields, percentile, view, field), cmap=CMAP,
                                  show_edges=view is not None, show_scalar_bar=False, lighting=not plane)
         if "rigid_outline" in fields and len(fields["rigid_outline"]) > 1:  # 3-D cylinders have none
             plotter.add_mesh(pyvista.lines_from_points(fields["rigid_outline"]), color="black", line_width=3)
@@ -154,7 +162,7 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
         ranges.append(tuple(float(v) for v in actor.mapper.lookup_table.scalar_range))
         plotter.close()
 
-    top = peak(fields)
+    top = peak(fields, field)
     dpi = 100
     aspects = [image.shape[1] / image.shape[0] for image in images]
     bars, titles = 1.1 * len(views), 1.1  # inches
@@ -168,10 +176,10 @@ def render(fields_npz_path, png_path, zoom=None, scale=1.0, zoom_radius=0.0, siz
                      f"{zoom if isinstance(zoom, str) else 'zoom'}, {2 * view[1]:.3g} mm wide", fontsize=11)
         mappable = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(*limits), CMAP)
         bar = figure.colorbar(mappable, ax=ax, extend="max", shrink=0.9, aspect=30, pad=0.02)
-        bar.set_label("von Mises (MPa)", fontsize=10)
+        bar.set_label(f"{name} (MPa)", fontsize=10)
     where = ", ".join(f"{c:.4g}" for c in top["at"][: 2 if plane else 3])
     near = f", {top['distance']:.2g} mm from {top['near']}" if top["near"] else ""
-    figure.suptitle(f"von Mises stress, displacements x {scale:g}: max {top['value']:.4g} MPa at ({where}) mm{near}\n"
+    figure.suptitle(f"{name}, displacements x {scale:g}: max {top['value']:.4g} MPa at ({where}) mm{near}\n"
                     f"each colour bar: minimum to the {percentile:g}th percentile (by area) of its view; "
                     "above: top colour", fontsize=11)
     figure.savefig(png_path, dpi=dpi)

@@ -151,3 +151,11 @@ def test_the_final_contact_fields_integrate_to_the_contact_forces(tmp_path):
         assert force > 5.0  # wedged: a residual force of several N per mm at both contacts
     assert np.all(fields["contact_status"][fields["contact_pressure"] > 0] == 1)
     assert np.all(fields["contact_status"][fields["contact_pressure"] == 0] == 0)
+    # the stress picture may show the contact pressure instead, its colours up to the largest
+    from femcontact.outputs.snapshot import render
+
+    info = render(tmp_path / "fields.npz", tmp_path / "pressure.png", zoom="contact_B", percentile=100.0,
+                  field="contact_pressure")
+    top = fields["contact_pressure"].max()
+    assert info["peak"]["value"] == top and info["ranges"][0] == pytest.approx((0.0, top))
+    assert (tmp_path / "pressure.png").stat().st_size > 0
