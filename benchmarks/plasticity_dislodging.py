@@ -9,9 +9,9 @@ wedged state's (`Puller.damage_threshold`), by the same bisection; the window be
 the range of pulls that free the peg without damage. A few pulls across 0.25-1.5 times the
 quasi-static pull-out show the plastic strain each adds.
 
-Writes results/plasticity_dislodging/resolution_R.md, .json and .png (R the mesh resolution).
+Writes results/plasticity_dislodging/NAME.md, .json and .png (NAME: resolution_R, or --name).
 
-    python -m benchmarks.plasticity_dislodging [--resolution 0.5]
+    python -m benchmarks.plasticity_dislodging [--resolution 0.5] [--set KEY=VALUE ...] [--name NAME]
 """
 import argparse
 import json
@@ -40,28 +40,34 @@ def plastic_puller(overrides: list[str] = ()) -> Puller:
 def window(puller: Puller, method: str, frequency: float, samples=SAMPLES) -> dict:
     """The least freeing and the least damaging pull of one method, and the pulls run."""
     pulls = [puller.pull(f * puller.pullout_force, method, frequency) for f in samples]
-    found = {**puller.threshold(method, frequency, pulls), **puller.damage_threshold(method, frequency, pulls)}
-    found["damage_window_N"] = found["damage_threshold_N"] - found["threshold_force_N"]
+    found = puller.damage_window(method, frequency, pulls)
     return {"method": method, "pulse_hz": frequency, **found,
             "pulls": [{k: row[k] for k in ("force_N", "dislodged", "peeq_added", "damaging", "wall_s")}
                       for row in sorted(pulls, key=lambda r: r["force_N"])]}
 
 
+def name(method: dict) -> str:
+    """'continuous' or 'pulse 50 Hz'."""
+    return method["method"] + (f" {method['pulse_hz']:g} Hz" if method["pulse_hz"] else "")
+
+
 def page(result: dict, seconds: float) -> str:
     r = result
     lines = ["# Dislodging on stainless 316: is there a pull that frees the peg without damage?", "",
-             f"`make plasticity_dislodging` (python -m benchmarks.plasticity_dislodging --resolution {r['resolution']:g}), "
-             f"{seconds:.0f} s on one core. See docs/plasticity.md.", "",
+             f"`{r['command']}`, {seconds:.0f} s on one core. See docs/plasticity.md.", "",
              f"Mesh resolution {r['resolution']:g} ({r['dofs']} dofs). Wedged state: max PEEQ {r['wedged_max_peeq']:.2e}, "
              f"plastic zone {r['wedged_plastic_zone']:.2e} mm^2, quasi-static pull-out {r['pullout_N']:.3f} N. "
              f"Damage: a pull adds more than {r['peeq_limit']:g} of PEEQ to the wedged state's.", "",
              *markdown_table(["pull", "least freeing (N)", "least damaging (N)", "window (N)", "bracket (N)"],
-                             [[m["method"] + (f" {m['pulse_hz']:g} Hz" if m["pulse_hz"] else ""), m["threshold_force_N"],
-                               m["damage_threshold_N"], m["damage_window_N"], m["bracket_N"]] for m in r["methods"]],
-                             formats=[None, "{:.3f}", "{:.3f}", "{:+.3f}", "{:.3f}"]), "",
+                             [[name(m), m["threshold_force_N"],
+                               f"none up to {m['no_damage_up_to_N']:.3f}" if m["damage_threshold_N"] is None
+                               else f"{m['damage_threshold_N']:.3f}",
+                               "> {:+.3f}".format(m["no_damage_up_to_N"] - m["threshold_force_N"])
+                               if m["damage_window_N"] is None else f"{m['damage_window_N']:+.3f}", m["bracket_N"]]
+                              for m in r["methods"]], formats=[None, "{:.3f}", None, None, "{:.3f}"]), "",
              "## Every pull", ""]
     for m in r["methods"]:
-        lines += [f"{m['method']}" + (f" {m['pulse_hz']:g} Hz" if m["pulse_hz"] else "") + ":", "",
+        lines += [f"{name(m)}:", "",
                   *markdown_table(["force (N)", "/ pull-out", "freed", "PEEQ added", "wall (s)"],
                                   [[p["force_N"], p["force_N"] / r["pullout_N"], p["dislodged"], p["peeq_added"],
                                     p["wall_s"]] for p in m["pulls"]],
@@ -84,15 +90,19 @@ def plot(result: dict, path: Path) -> None:
             axis.semilogy([p["force_N"] / pullout for p in pulls], [max(p["peeq_added"], 1e-7) for p in pulls],
                           marker, color="tab:blue" if freed else "tab:grey", label=label)
         axis.axhline(limit, color="tab:red", ls="--", lw=1, label=f"PEEQ limit {limit:g}")
-        free, damage = m["threshold_force_N"] / pullout, m["damage_threshold_N"] / pullout
+        free = m["threshold_force_N"] / pullout
         axis.axvline(free, color="tab:green", lw=1.5, label=f"least freeing pull {m['threshold_force_N']:.2f} N")
-        axis.axvline(damage, color="tab:red", lw=1.5, label=f"least damaging pull {m['damage_threshold_N']:.2f} N")
+        if m["damage_threshold_N"] is None:
+            damage = m["no_damage_up_to_N"] / pullout
+            verdict = f"window > {m['no_damage_up_to_N'] - m['threshold_force_N']:.1f} N"
+        else:
+            damage = m["damage_threshold_N"] / pullout
+            axis.axvline(damage, color="tab:red", lw=1.5, label=f"least damaging pull {m['damage_threshold_N']:.2f} N")
+            verdict = (f"window {m['damage_window_N']:.2f} N" if damage > free
+                       else f"no window: damage starts {-m['damage_window_N']:.2f} N below")
         if damage > free:
             axis.axvspan(free, damage, color="tab:green", alpha=0.15, label="frees without damage")
-        verdict = (f"window {m['damage_window_N']:.2f} N" if damage > free
-                   else f"no window: damage starts {-m['damage_window_N']:.2f} N below")
-        name = m["method"] + (f" {m['pulse_hz']:g} Hz" if m["pulse_hz"] else "")
-        axis.set(xlabel="peak pull / quasi-static pull-out", title=f"{name}: {verdict}")
+        axis.set(xlabel="peak pull / quasi-static pull-out", title=f"{name(m)}: {verdict}")
         axis.legend(fontsize=7, loc="lower right")
     axes[0].set_ylabel("PEEQ added by the pull")
     fig.suptitle(f"Thesis case 1 on stainless 316, mesh resolution {result['resolution']:g}", fontsize=10)
@@ -103,18 +113,23 @@ def plot(result: dict, path: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--resolution", type=float, default=0.5, help="mesh.resolution of the blocks")
-    resolution = parser.parse_args().resolution
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a scene override")
+    parser.add_argument("--name", help="file name of the results (default resolution_R)")
+    args = parser.parse_args()
+    resolution = args.resolution
     start = time.perf_counter()
     OUT.mkdir(parents=True, exist_ok=True)
-    puller = plastic_puller([f"mesh.resolution={resolution}"])
-    result = {"resolution": resolution, "dofs": puller.simulation.dofs, "pullout_N": puller.pullout_force,
+    puller = plastic_puller([f"mesh.resolution={resolution}"] + args.set)
+    command = " ".join(["python -m benchmarks.plasticity_dislodging", f"--resolution {resolution:g}",
+                        *(f"--set '{o}'" for o in args.set), *([f"--name {args.name}"] if args.name else [])])
+    result = {"command": command, "overrides": args.set, "resolution": resolution, "dofs": puller.simulation.dofs, "pullout_N": puller.pullout_force,
               "peeq_limit": puller.settings["peeq_limit"], "wedged_max_peeq": puller.wedged_row["max_peeq"],
               "wedged_plastic_zone": puller.wedged_row["plastic_zone"], "methods": []}
     for method, frequency in METHODS:
         result["methods"].append(window(puller, method, frequency))
         print({k: v for k, v in result["methods"][-1].items() if k != "pulls"}, flush=True)
     seconds = time.perf_counter() - start
-    name = f"resolution_{resolution:g}"
+    name = args.name or f"resolution_{resolution:g}"
     (OUT / f"{name}.json").write_text(json.dumps(result, indent=1))
     (OUT / f"{name}.md").write_text(page(result, seconds))
     plot(result, OUT / f"{name}.png")

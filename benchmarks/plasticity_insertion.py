@@ -67,7 +67,7 @@ def crossing(factor: float, contact_size: float) -> dict:
 
 def page(rows: list[dict], contact_size: float, seconds: float) -> str:
     lines = ["# Insertion on stainless 316: support stiffness against plastic flow in the chamfer crossing", "",
-             f"`make plasticity_insertion` (python -m benchmarks.plasticity_insertion --contact-size {contact_size:g}), "
+             f"`python -m benchmarks.plasticity_insertion --contact-size {contact_size:g}`, "
              f"{seconds:.0f} s on one core. See docs/plasticity.md.", "",
              *markdown_table(["K_x (N/mm)", "K_theta (N mm/rad)", "chamfer peak Fz (N)", "peak contact force (N)",
                               "peak von Mises (MPa)", "PEEQ after chamfer", "plastic zone after chamfer (mm^2)",
@@ -86,7 +86,7 @@ def page(rows: list[dict], contact_size: float, seconds: float) -> str:
 
 def onset(rows: list[dict]) -> tuple[float, float] | None:
     """(the stiffest K_x without plastic flow, the softest with it) in the chamfer crossing, or None."""
-    ok = [r for r in rows if "peeq_after_chamfer" in r]
+    ok = [r for r in rows if r["status"] == "ok"]
     elastic = [r["kx"] for r in ok if r["peeq_after_chamfer"] == 0]
     plastic = [r["kx"] for r in ok if r["peeq_after_chamfer"] > 0]
     return (max(elastic), min(plastic)) if elastic and plastic else None
@@ -98,7 +98,7 @@ def plot(rows: list[dict], contact_size: float, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ok = [r for r in rows if "peeq_end" in r]
+    ok = [r for r in rows if r["status"] == "ok"]
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), sharex=True)
     kx = [r["kx"] for r in ok]
     left.loglog(kx, [r["peak_von_mises"] for r in ok], "o-", label="peak von Mises in the hole")

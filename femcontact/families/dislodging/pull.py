@@ -19,7 +19,8 @@ A pull ends at the event "dislodged": both contact zones open, or the peg risen 
 also records the largest equivalent plastic strain it added to the wedged state's
 (`peeq_added`) and whether that passed `peeq_limit` (`damaging`); the search then also bisects
 for the least damaging pull, and `damage_window_N` is how far above the threshold force it lies
-(the pulls that free the peg without damage; <= 0: every pull that frees it damages). Impulses: `impulse_Ns` is the
+(the pulls that free the peg without damage; <= 0: every pull that frees it damages; None: no
+pull up to `no_damage_up_to_N` damages). Impulses: `impulse_Ns` is the
 exact integral of the applied force from the start of the pull to the event;
 `impulse_frames_Ns` the thesis' frame-quantised one, to the first output frame
 (`frame` = 0.005 s) at or after the event.
@@ -228,8 +229,9 @@ class Puller:
 
     def least_force(self, method: str, frequency: float, rows: list, column: str = "dislodged") -> tuple:
         """Bisection for the smallest peak force whose pull has `column` true (every pull appended
-        to rows; pulls already in rows are reused): (low, high), the bracket it ends on. The
-        first bracket is `bracket` or 1 to 1.05 times the pull-out, widened by doubling steps."""
+        to rows; pulls already in rows are reused): (low, high), the bracket it ends on, or
+        (the largest force pulled, inf) when no pull up to it has `column`. The first bracket is
+        `bracket` or 1 to 1.05 times the pull-out, widened by doubling steps (8 at most)."""
         s = self.settings
         pullout = self.pullout_force
         low, high = s["bracket"] or (pullout, 1.05 * pullout)
@@ -254,7 +256,7 @@ class Puller:
                 break
             width *= 2
         else:
-            raise RuntimeError(f"no bracket of the least {column} pull found between {low} and {high} N")
+            return low, math.inf
         while high - low > s["tolerance"] * (1 + 1e-9):
             middle = (low + high) / 2
             if holds(middle):
@@ -266,15 +268,28 @@ class Puller:
     def threshold(self, method: str, frequency: float, rows: list) -> dict:
         """The smallest peak force that dislodges, by `least_force`."""
         low, high = self.least_force(method, frequency, rows)
+        if math.isinf(high):
+            raise RuntimeError(f"no pull up to {low} N dislodges the peg")
         pulled = {round(row["force_N"], 6): row for row in rows}[round(high, 6)]
         return {"threshold_force_N": high, "bracket_N": high - low, "low_N": low,
                 "impulse_at_threshold_Ns": pulled["impulse_Ns"]}
 
     def damage_threshold(self, method: str, frequency: float, rows: list) -> dict:
         """The smallest peak force whose pull adds more than `peeq_limit` of plastic strain, by
-        `least_force` (with the effect `plasticity`)."""
+        `least_force` (with the effect `plasticity`); None when no pull up to `no_damage_up_to_N`
+        damages."""
         low, high = self.least_force(method, frequency, rows, "damaging")
-        return {"damage_threshold_N": high, "damage_bracket_N": high - low}
+        if math.isinf(high):
+            return {"damage_threshold_N": None, "damage_bracket_N": None, "no_damage_up_to_N": low}
+        return {"damage_threshold_N": high, "damage_bracket_N": high - low, "no_damage_up_to_N": low}
+
+    def damage_window(self, method: str, frequency: float, rows: list) -> dict:
+        """The least freeing and the least damaging pull (`threshold`, `damage_threshold`) and
+        `damage_window_N`, the second minus the first (None: no damaging pull found)."""
+        found = {**self.threshold(method, frequency, rows), **self.damage_threshold(method, frequency, rows)}
+        damage = found["damage_threshold_N"]
+        found["damage_window_N"] = None if damage is None else damage - found["threshold_force_N"]
+        return found
 
     def holds(self, force: float) -> bool:
         """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
@@ -381,10 +396,8 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
     for force, thesis in [(f, "") for f in s["forces"]] + [(round(f * scale, 6), f) for f in s["thesis_forces"]]:
         rows.append({**puller.pull(force, method, frequency), "search": False, "thesis_force_N": thesis})
     if s["search"]:
-        metrics.update(puller.threshold(method, frequency, rows))
-        if puller.plasticity is not None:
-            metrics.update(puller.damage_threshold(method, frequency, rows))
-            metrics["damage_window_N"] = metrics["damage_threshold_N"] - metrics["threshold_force_N"]
+        found = puller.damage_window if puller.plasticity is not None else puller.threshold
+        metrics.update(found(method, frequency, rows))
     for row in rows:
         row.update(force_over_pullout=row["force_N"] / puller.pullout_force,
                    thickness_mm=s["thickness"])
