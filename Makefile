@@ -131,11 +131,9 @@ plasticity: setup
 	$(PY) -m benchmarks.plasticity
 
 # The wedged thesis peg on stainless 316: the least pull that frees it against the least that adds
-# 1e-4 of plastic strain, constant and 50 Hz pulses (mesh resolution 0.5), with the hole's sharp mouth
-# and with a 0.2 mm chamfer on it; results/plasticity_dislodging/
+# 1e-4 of plastic strain, constant and 50 Hz pulses (mesh resolution 0.5); results/plasticity_dislodging/
 plasticity_dislodging: setup
 	$(PY) -m benchmarks.plasticity_dislodging
-	$(PY) -m benchmarks.plasticity_dislodging --set hole.chamfer_width=0.2 --name chamfer_0.2
 
 # The insertion's chamfer crossing on stainless 316: peak PEEQ and plastic zone against the support's
 # stiffness (K_x 20 to 600 N/mm); results/plasticity_insertion/
