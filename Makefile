@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_methods_2d dislodging_methods_3d dislodging_methods_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d accuracy stability plasticity clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d accuracy stability plasticity plasticity_dislodging plasticity_insertion clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -129,6 +129,16 @@ bench_hertz_3d: setup
 # Plasticity on the wedging case, an edge radius under refinement, its cost; results/plasticity/plasticity.md
 plasticity: setup
 	$(PY) -m benchmarks.plasticity
+
+# The wedged thesis peg on stainless 316: the least pull that frees it against the least that adds
+# 1e-4 of plastic strain, constant and 50 Hz pulses (mesh resolution 0.5); results/plasticity_dislodging/
+plasticity_dislodging: setup
+	$(PY) -m benchmarks.plasticity_dislodging
+
+# The insertion's chamfer crossing on stainless 316: peak PEEQ and plastic zone against the support's
+# stiffness (K_x 20 to 600 N/mm); results/plasticity_insertion/
+plasticity_insertion: setup
+	$(PY) -m benchmarks.plasticity_insertion
 
 # What accuracy costs in time: error against wall time per knob; results/accuracy/accuracy.md
 accuracy: setup

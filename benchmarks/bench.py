@@ -14,7 +14,8 @@
    low-rank update (the default) against the whole Jacobian factored every iteration.
 4. The Hertz scene at about 10k dofs with each effect switched on in turn: time per
    increment as a ratio to the frictionless quasi-static scene (an effect not named
-   costs nothing), and the thesis wedging scene at about 10k dofs.
+   costs nothing), and the thesis wedging scene at about 10k dofs; both scenes again elastic and
+   with `plasticity` (the thesis' 316), as a ratio of the two.
 5. The study runner's overhead per one-rank case, fresh processes against warm workers
    (runner_overhead.py).
 The solver's goals are stated as ratios measured in this run. Writes results/bench/bench.md
@@ -274,6 +275,34 @@ def effect_costs() -> list[dict]:
     return rows
 
 
+def plasticity_costs() -> list[dict]:
+    """Seconds per increment with and without `plasticity` (the thesis' 316: 210 MPa, 290 MPa at
+    plastic strain 1) on the Hertz scene at ~10k dofs (p0 = 4 x yield: heavy flow) and the thesis
+    wedging scene: warm (forms compiled first), the fastest of 3, one core; the plastic row's
+    `ratio` is its time over the elastic row's, measured back to back."""
+    rows = []
+    for name, scene in (("Hertz, ~10k dofs", hertz_with(["plane_strain"])), ("wedging, thesis scene", wedging_scene(1.6))):
+        for law in ("elastic", "plastic"):
+            effects = list(scene["effects"]) + (["plasticity"] if law == "plastic" else [])
+            variant = resolve_scene(dict(scene, effects=effects, plasticity={"hardening": [[0, 210], [1, 290]]}))
+            per_increment(variant)  # compile outside the timing
+            best = min((per_increment(variant) for _ in range(3)), key=lambda r: r["seconds_per_increment"])
+            rows.append({"scene": name, "law": law, **{k: best[k] for k in ("dofs", "seconds_per_increment",
+                                                                            "newton_per_increment")}})
+        rows[-1]["ratio"] = rows[-1]["seconds_per_increment"] / rows[-2]["seconds_per_increment"]
+        print(f"  plasticity cost, {name}: ratio {rows[-1]['ratio']:.2f}", flush=True)
+    return rows
+
+
+def plasticity_cost_table(rows: list[dict]) -> list[str]:
+    """`plasticity_costs` as markdown lines, one row per scene."""
+    return markdown_table(
+        ["scene", "dofs", "elastic s / increment (Newton)", "plastic s / increment (Newton)", "ratio"],
+        [[elastic["scene"], elastic["dofs"], f"{elastic['seconds_per_increment']:.3f} ({elastic['newton_per_increment']:.1f})",
+          f"{plastic['seconds_per_increment']:.3f} ({plastic['newton_per_increment']:.1f})", plastic["ratio"]]
+         for elastic, plastic in zip(rows[::2], rows[1::2])], formats=[None] * 4 + ["{:.2f}"])
+
+
 def goals(codes: list[dict], skipped: str, wedging: dict, wedging3d: list | None = None,
           overhead: dict | None = None, variants: list | None = None) -> list[list[str]]:
     """The performance goals (docs/bench.md) as measured in this run: [goal, measured, ratio, holds]."""
@@ -326,7 +355,7 @@ def goals(codes: list[dict], skipped: str, wedging: dict, wedging3d: list | None
 
 
 def markdown(hertz_rows, effects_rows, codes=(), skipped="", wedging=None, wedging3d=None, overhead=None,
-             variants=None) -> str:
+             variants=None, plastic_rows=None) -> str:
     lines = ["# femcontact benchmark", "", "Wall times measured in one run on a shared machine (other jobs running): "
              "compare them as ratios within this run.", ""]
     if wedging is not None:
@@ -364,6 +393,9 @@ def markdown(hertz_rows, effects_rows, codes=(), skipped="", wedging=None, wedgi
     lines += markdown_table(["scene", "dofs", "Newton its / increment", "s / increment", "ratio"],
                             [[r["scene"], r["dofs"], r["newton_per_increment"], r["seconds_per_increment"], r["ratio"]]
                              for r in effects_rows], formats=[None, None, "{:.1f}", "{:.3f}", "{:.2f}"])
+    if plastic_rows:
+        lines += ["", "## Cost per increment with and without plasticity (warm, fastest of 3, 1 rank)", "",
+                  *plasticity_cost_table(plastic_rows)]
     return "\n".join(lines) + "\n"
 
 
@@ -375,12 +407,15 @@ def main() -> None:
     wedging3d = [wedging_3d(2), wedging_3d(1)]
     hertz_rows = hertz_table()
     effects_rows = effect_costs()
+    plastic_rows = plasticity_costs()
     overhead = runner_overhead.measure(OUT / "runner")
     (OUT / "bench.json").write_text(json.dumps({"hertz_codes": codes, "getfem_skipped": skipped, "wedging": wedging,
                                                 "wedging_variants": variants,
                                                 "wedging_3d": wedging3d, "hertz": hertz_rows, "effects": effects_rows,
+                                                "plasticity": plastic_rows,
                                                 "runner_overhead": overhead}, indent=1))
-    text = (markdown(hertz_rows, effects_rows, codes, skipped, wedging, wedging3d, overhead, variants) + "\n"
+    text = (markdown(hertz_rows, effects_rows, codes, skipped, wedging, wedging3d, overhead, variants, plastic_rows)
+            + "\n"
             + runner_overhead.markdown(overhead))
     (OUT / "bench.md").write_text(text)
     print(text)

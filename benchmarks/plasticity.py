@@ -9,9 +9,8 @@ holds the peg, and does an edge radius make the peak stress a property of the pa
    (`mesh.contact_size` 0.02 to 0.0025 mm), under the wedging push: the peak von Mises stress
    in block B (under the rounded corner) against block A (whose own mouth corner stays sharp),
    elastic, and the peak PEEQ and plastic zone with `plasticity`.
-3. Cost: seconds per increment with and without `plasticity` on make bench's Hertz scene
-   (~10k dofs, p0 = 4 x yield: heavy flow) and thesis wedging scene (bench.py's scenes and timing,
-   warm, the fastest of 3).
+3. Cost: seconds per increment with and without `plasticity` (`bench.plasticity_costs`, the
+   table `make bench` also writes).
 
 Writes results/plasticity/plasticity.md, plasticity.json and plasticity.png.
 
@@ -24,7 +23,7 @@ from pathlib import Path
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.families import load_scene, resolve_scene
+from femcontact.families import load_scene
 from femcontact.families.repository import SCENES
 from femcontact.outputs.tables import markdown_table
 from femcontact.solver.stepping import Simulation
@@ -92,21 +91,6 @@ def edge_radius_rows(radius: float = 1.0) -> list[dict]:
     return rows
 
 
-def cost_rows() -> list[dict]:
-    rows = []
-    for name, scene in (("Hertz, ~10k dofs", bench.hertz_with(["plane_strain"])), ("wedging, thesis scene", bench.wedging_scene(1.6))):
-        for law in ("elastic", "plastic"):
-            data = dict(scene, effects=list(scene["effects"]) + (["plasticity"] if law == "plastic" else []))
-            variant = resolve_scene(data)
-            bench.per_increment(variant)  # compile outside the timing
-            best = min((bench.per_increment(variant) for _ in range(3)), key=lambda r: r["seconds_per_increment"])
-            rows.append({"scene": name, "law": law, "dofs": best["dofs"], "seconds_per_increment": best["seconds_per_increment"],
-                         "newton_per_increment": best["newton_per_increment"]})
-        rows[-1]["ratio"] = rows[-1]["seconds_per_increment"] / rows[-2]["seconds_per_increment"]
-        print(rows[-2:], flush=True)
-    return rows
-
-
 def page(wedging: list[dict], edges: list[dict], costs: list[dict], seconds: float) -> str:
     lines = ["# Plasticity: wedging on stainless 316, edge radius, cost", "",
              f"`make plasticity` (python -m benchmarks.plasticity), {seconds:.0f} s. "
@@ -126,13 +110,8 @@ def page(wedging: list[dict], edges: list[dict], costs: list[dict], seconds: flo
                                f"{r['peak_B_plastic']:.0f} / {r['peak_A_plastic']:.0f}", r["max_peeq"], r["plastic_zone"]]
                               for r in edges],
                              formats=["{:g}", None, "{:.0f}", "{:.0f}", None, "{:.2e}", "{:.2e}"]),
-             "", "## Cost per increment (warm, fastest of 3, one core)", "",
-             *markdown_table(["scene", "dofs", "elastic s / increment (Newton)", "plastic s / increment (Newton)", "ratio"],
-                             [[elastic["scene"], elastic["dofs"],
-                               f"{elastic['seconds_per_increment']:.3f} ({elastic['newton_per_increment']:.1f})",
-                               f"{plastic['seconds_per_increment']:.3f} ({plastic['newton_per_increment']:.1f})",
-                               plastic["ratio"]] for elastic, plastic in zip(costs[::2], costs[1::2])],
-                             formats=[None] * 4 + ["{:.2f}"])]
+             "", "## Cost per increment (warm, fastest of 3, one core; as in make bench)", "",
+             *bench.plasticity_cost_table(costs)]
     return "\n".join(lines) + "\n"
 
 
@@ -164,7 +143,7 @@ def plot(wedging: list[dict], edges: list[dict], path: Path) -> None:
 def main() -> None:
     start = time.perf_counter()
     OUT.mkdir(parents=True, exist_ok=True)
-    wedging, edges, costs = wedging_rows(), edge_radius_rows(), cost_rows()
+    wedging, edges, costs = wedging_rows(), edge_radius_rows(), bench.plasticity_costs()
     seconds = time.perf_counter() - start
     (OUT / "plasticity.json").write_text(json.dumps({"wedging": wedging, "edge_radius": edges, "cost": costs}, indent=1))
     (OUT / "plasticity.md").write_text(page(wedging, edges, costs, seconds))

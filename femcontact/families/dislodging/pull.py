@@ -15,7 +15,12 @@ table says what one case of the study does from the wedged state, in one process
   bisection for the threshold force (to `tolerance`).
 
 A pull ends at the event "dislodged": both contact zones open, or the peg risen by
-`rise`; the event time is located inside the increment. Impulses: `impulse_Ns` is the
+`rise`; the event time is located inside the increment. With the effect `plasticity` each pull
+also records the largest equivalent plastic strain it added to the wedged state's
+(`peeq_added`) and whether that passed `peeq_limit` (`damaging`); the search then also bisects
+for the least damaging pull, and `damage_window_N` is how far above the threshold force it lies
+(the pulls that free the peg without damage; <= 0: every pull that frees it damages; None: no
+pull up to `no_damage_up_to_N` damages). Impulses: `impulse_Ns` is the
 exact integral of the applied force from the start of the pull to the event;
 `impulse_frames_Ns` the thesis' frame-quantised one, to the first output frame
 (`frame` = 0.005 s) at or after the event.
@@ -36,6 +41,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+from mpi4py import MPI
 
 
 PULL_STEP, OBSERVE_STEP = 2, 3
@@ -123,6 +129,7 @@ class Puller:
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
         self.rotation_held = self.settings["rotation"] == "held"
+        self.plasticity = next((c for c in sim.problem.components if c.name == "plasticity"), None)
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
         if restart and stored.is_file():
@@ -179,6 +186,9 @@ class Puller:
                "rise_at_end_mm": float(sim.problem.rigid.values[1] - self.wedged["state"]["r"][1]),
                "increments": outcome.increments, "newton_iterations": outcome.newton_iterations,
                "settled": outcome.settled, "wall_s": wall}
+        if self.plasticity is not None:
+            row["peeq_added"] = self.peeq_added()
+            row["damaging"] = row["peeq_added"] > s["peeq_limit"]
         if outcome.event:
             if self.before_event is None or force < self.before_event[0]:
                 self.before_event = (float(force), outcome.before_event)
@@ -211,40 +221,75 @@ class Puller:
             raise error
         return row
 
-    def threshold(self, method: str, frequency: float, rows: list) -> dict:
-        """Bisection for the smallest peak force that dislodges (every pull appended to rows)."""
+    def peeq_added(self) -> float:
+        """The largest equivalent plastic strain added to the wedged state's at a quadrature point."""
+        peeq = self.plasticity.quadrature.peeq
+        added = peeq.x.array - self.wedged["state"][f"plasticity.{peeq.name}"]
+        return self.simulation.problem.mesh.comm.allreduce(float(added.max(initial=0.0)), op=MPI.MAX)
+
+    def least_force(self, method: str, frequency: float, rows: list, column: str = "dislodged") -> tuple:
+        """Bisection for the smallest peak force whose pull has `column` true (every pull appended
+        to rows; pulls already in rows are reused): (low, high), the bracket it ends on, or
+        (the largest force pulled, inf) when no pull up to it has `column`. The first bracket is
+        `bracket` or 1 to 1.05 times the pull-out, widened by doubling steps (8 at most)."""
         s = self.settings
         pullout = self.pullout_force
         low, high = s["bracket"] or (pullout, 1.05 * pullout)
-        cache = {round(row["force_N"], 6): row for row in rows}  # pulls already run are reused
+        cache = {round(row["force_N"], 6): row for row in rows}
 
-        def dislodges(force):
+        def holds(force):
             force = round(force, 6)
             if force not in cache:
                 row = self.pull(force, method, frequency)
                 row["search"] = True
                 rows.append(row)
                 cache[force] = row
-            return cache[force]["dislodged"]
+            return cache[force][column]
 
         width = high - low
         for _ in range(8):
-            if not dislodges(high):
+            if not holds(high):
                 low, high = high, high + width
-            elif dislodges(low):
+            elif low > 0 and holds(low):
                 low, high = max(low - width, 0.0), low
             else:
                 break
+            width *= 2
         else:
-            raise RuntimeError(f"no bracket of the threshold found between {low} and {high} N")
+            return low, math.inf
         while high - low > s["tolerance"] * (1 + 1e-9):
             middle = (low + high) / 2
-            if dislodges(middle):
+            if holds(middle):
                 high = middle
             else:
                 low = middle
+        return low, high
+
+    def threshold(self, method: str, frequency: float, rows: list) -> dict:
+        """The smallest peak force that dislodges, by `least_force`."""
+        low, high = self.least_force(method, frequency, rows)
+        if math.isinf(high):
+            raise RuntimeError(f"no pull up to {low} N dislodges the peg")
+        pulled = {round(row["force_N"], 6): row for row in rows}[round(high, 6)]
         return {"threshold_force_N": high, "bracket_N": high - low, "low_N": low,
-                "impulse_at_threshold_Ns": cache[round(high, 6)]["impulse_Ns"]}
+                "impulse_at_threshold_Ns": pulled["impulse_Ns"]}
+
+    def damage_threshold(self, method: str, frequency: float, rows: list) -> dict:
+        """The smallest peak force whose pull adds more than `peeq_limit` of plastic strain, by
+        `least_force` (with the effect `plasticity`); None when no pull up to `no_damage_up_to_N`
+        damages."""
+        low, high = self.least_force(method, frequency, rows, "damaging")
+        if math.isinf(high):
+            return {"damage_threshold_N": None, "damage_bracket_N": None, "no_damage_up_to_N": low}
+        return {"damage_threshold_N": high, "damage_bracket_N": high - low, "no_damage_up_to_N": low}
+
+    def damage_window(self, method: str, frequency: float, rows: list) -> dict:
+        """The least freeing and the least damaging pull (`threshold`, `damage_threshold`) and
+        `damage_window_N`, the second minus the first (None: no damaging pull found)."""
+        found = {**self.threshold(method, frequency, rows), **self.damage_threshold(method, frequency, rows)}
+        damage = found["damage_threshold_N"]
+        found["damage_window_N"] = None if damage is None else damage - found["threshold_force_N"]
+        return found
 
     def holds(self, force: float) -> bool:
         """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
@@ -323,12 +368,11 @@ def write_snapshot_fields(puller, case_dir: Path) -> None:
 def pull_columns() -> list[str]:
     return ["case", "method", "pulse_hz", "rotation", "force_N", "dislodged", "dislodge_time_s", "impulse_Ns",
             "impulse_frames_Ns", "event", "force_over_pullout", "thesis_force_N", "thickness_mm", "rise_at_end_mm",
-            "increments", "newton_iterations", "settled", "search", "wall_s"]
+            "increments", "newton_iterations", "settled", "search", "wall_s", "peeq_added", "damaging"]
 
 
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:
     """One study case: the wedged state (or its checkpoint), then the case's pulls or pull-out."""
-    from mpi4py import MPI
 
     case_dir = Path(case_dir)
     s = scene["dislodging"]
@@ -352,7 +396,8 @@ def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None
     for force, thesis in [(f, "") for f in s["forces"]] + [(round(f * scale, 6), f) for f in s["thesis_forces"]]:
         rows.append({**puller.pull(force, method, frequency), "search": False, "thesis_force_N": thesis})
     if s["search"]:
-        metrics.update(puller.threshold(method, frequency, rows))
+        found = puller.damage_window if puller.plasticity is not None else puller.threshold
+        metrics.update(found(method, frequency, rows))
     for row in rows:
         row.update(force_over_pullout=row["force_N"] / puller.pullout_force,
                    thickness_mm=s["thickness"])

@@ -37,6 +37,9 @@ DISLODGING = {
     "dt_min": Field("float", 1e-8, "smallest time increment (s)", positive=True),
     "max_rise_per_increment": Field("float", 1e-3, "an increment that lifts the peg more is halved (mm)",
                                     positive=True),
+    "peeq_limit": Field("float", 1e-4, "with the effect 'plasticity': a pull is damaging when it adds more than this "
+                        "equivalent plastic strain (PEEQ) to the wedged state's at some point of the body; the "
+                        "search then also bisects for the least damaging pull", positive=True),
 }
 
 
