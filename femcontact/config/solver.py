@@ -12,7 +12,8 @@ class SolverOptions:
     """Newton's tolerances and strategies, the increment cutting and the linear solver. The
     fields without a default are the scene's `[solver]` keys (their defaults live in the schema).
 
-    Newton stops when |R| <= atol + rtol * (the largest of the bulk, load and contact force
+    Newton stops when |R| (the rigid body's moments divided by its size, so every row is a
+    force) <= atol + rtol * (the largest of the bulk, load and contact force
     norms) + the residual's round-off floor (all in N)."""
     max_iterations: int
     """Newton iterations per solve."""

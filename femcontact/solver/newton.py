@@ -156,6 +156,15 @@ class SchurNewton:
         free = self.problem.rigid.free
         return float(np.sqrt(R_u.norm() ** 2 + np.sum(R_r[free] ** 2)))
 
+    def force_norm(self, R_u, R_r) -> float:
+        """|R| with the rigid body's moment rows (N*mm) divided by its size (`Problem.body_size`),
+        so every row is a force (N): what the stopping test measures. A moment's round-off is its
+        forces' round-off times arms up to the body's size, so the plain |R| of a peg pressed flat
+        along a wall can stall above atol while its forces have converged."""
+        p = self.problem
+        arm = np.where(np.arange(len(R_r)) < p.dim, 1.0, p.body_size)
+        return self.norm(R_u, R_r / arm)
+
     # -- Newton --------------------------------------------------------------------------
     def _time_step(self) -> np.ndarray | None:
         """What `time_step_stiffness` reports now (None without an integrator)."""
@@ -218,7 +227,7 @@ class SchurNewton:
             history.append(norm)
             if not np.isfinite(norm):
                 raise NewtonFailure("residual is not finite", history)
-            if norm <= self.tolerance(scale):
+            if self.force_norm(R_u, R_r) <= self.tolerance(scale):
                 return iteration
             if iteration == options.max_iterations:
                 break
