@@ -167,6 +167,12 @@ class Problem:
         return self.shape["scale"]
 
     @property
+    def rigid_arms(self) -> np.ndarray:
+        """Per rigid dof, the length (mm) that turns it into a displacement and its residual row
+        into a force: 1 for a translation, `body_size` for a rotation."""
+        return np.where(np.arange(len(self.rigid.names)) < self.dim, 1.0, self.body_size)
+
+    @property
     def contact_size(self) -> float:
         """The element size in the contact zones (mm)."""
         return self.model.h_contact

@@ -253,7 +253,7 @@ class DynamicSimulation(Simulation):
     def _integrate(self, steps, event, dt_max, dt_min, max_rise_per_increment, settle_period,
                    settle_tolerance, monitor) -> Outcome:
         p = self.problem
-        weights = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, p.body_size)
+        weights = p.rigid_arms
         y0 = float(p.rigid.values[1])
         outcome = Outcome(None, None)
         dt = dt_max

@@ -161,9 +161,7 @@ class SchurNewton:
         so every row is a force (N): what the stopping test measures. A moment's round-off is its
         forces' round-off times arms up to the body's size, so the plain |R| of a peg pressed flat
         along a wall can stall above atol while its forces have converged."""
-        p = self.problem
-        arm = np.where(np.arange(len(R_r)) < p.dim, 1.0, p.body_size)
-        return self.norm(R_u, R_r / arm)
+        return self.norm(R_u, R_r / self.problem.rigid_arms)
 
     # -- Newton --------------------------------------------------------------------------
     def _time_step(self) -> np.ndarray | None:
@@ -198,9 +196,7 @@ class SchurNewton:
         continuation, or moves that pose along in pseudo time (see Simulation.increment)."""
         p = self.problem
         k = p.stiffness_scale() * p.contact_size
-        size = p.body_size
-        scale = np.where(np.arange(len(p.rigid.names)) < p.dim, 1.0, size * size)
-        self.stabilization = factor * np.diag(k * scale)
+        self.stabilization = factor * np.diag(k * p.rigid_arms ** 2)
         self.tie_pose = p.rigid.r_old.value.copy() if tie_pose is None else np.array(tie_pose, dtype=float)
 
     def stabilization_load(self) -> np.ndarray:
@@ -361,7 +357,7 @@ class SchurNewton:
     def _at_cap(self, dr) -> bool:
         """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""
         p = self.problem
-        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, p.body_size)).max()
+        length = np.abs(dr * p.rigid_arms).max()
         return bool(length >= (1 - 1e-9) * p.contact_size)
 
     def line_search(self, load, du, dr, residual):
