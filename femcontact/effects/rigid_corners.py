@@ -25,6 +25,10 @@ from femcontact.effects.base import Effect
 from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
 
+SMOOTH_ANGLE = np.radians(30.0)
+"""Two facets meeting at a node at less than this angle (reference configuration) share the
+node's normal: mesh facets of one smooth face do, the faces of a geometric corner do not."""
+
 TOUCHING = 1e3 * np.finfo(float).eps
 """Gap (relative to the body's size) within which a corner counts as touching: a corner placed
 on the surface lands there to round-off (3.6e-15 mm in the default 2-D wedging case). As the
@@ -56,6 +60,7 @@ class RigidCorners(Effect):
         self.friction = "friction" in p.effects
         self.segments = self._segments()
         self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
+        self.neighbours = self._neighbours()
         self.active_count = 0
         self.search = 4 * p.model.h_contact
         self.touching = TOUCHING * p.extent  # mm
@@ -85,6 +90,36 @@ class RigidCorners(Effect):
                 rows.append([dofs[(local + 1) % 3], dofs[(local + 2) % 3], dofs[local]])
         return np.array(rows, dtype=np.int32).reshape(-1, 3)
 
+    def _normals(self, u: np.ndarray) -> np.ndarray:
+        """Outward unit normals of this rank's segments for the displacement `u` (m x 2)."""
+        u = u.reshape(-1, 2)
+        a, b, c = (self.segments[:, i] for i in range(3))
+        xa, xb, xc = (self.coordinates[i] + u[i] for i in (a, b, c))
+        return _outward(xb - xa, xa - xc)
+
+    def _all_normals(self, u: np.ndarray) -> np.ndarray:
+        """The normals of every rank's segments, in rank order (collective)."""
+        comm = self.problem.mesh.comm
+        normals = self._normals(u)
+        return np.concatenate(comm.allgather(normals)) if comm.size > 1 else normals
+
+    def _neighbours(self) -> np.ndarray:
+        """For each end (a, b) of this rank's segments, the index (in `_all_normals`) of the
+        segment that shares its node and whose normal it is averaged with, or -1 (collective)."""
+        comm = self.problem.mesh.comm
+        imap = self.problem.V.dofmap.index_map
+        ends = imap.local_to_global(self.segments[:, :2].reshape(-1).astype(np.int32)).reshape(-1, 2)
+        all_ends = np.concatenate(comm.allgather(ends)).reshape(-1, 2)
+        normals = self._all_normals(np.zeros_like(self.problem.u.x.array))
+        offset = sum(comm.allgather(len(ends))[:comm.rank])
+        out = np.full(ends.shape, -1, dtype=np.int64)
+        for i, pair in enumerate(ends):
+            for j, node in enumerate(pair):
+                other = [m for m in np.flatnonzero((all_ends == node).any(axis=1)) if m != offset + i]
+                if len(other) == 1 and normals[offset + i] @ normals[other[0]] > np.cos(SMOOTH_ANGLE):
+                    out[i, j] = other[0]
+        return out
+
     def _placed(self, values=None) -> np.ndarray:
         """Current positions of all corners (mm) for the pose `values` (default: the current one)."""
         rigid = self.problem.rigid
@@ -92,14 +127,16 @@ class RigidCorners(Effect):
         return rigid.p0 + np.asarray(t) + self.points @ (rotation_numpy(angles) @ rigid.Q0).T
 
     # -- the element ------------------------------------------------------------------
-    def _force(self, k: int, corner: np.ndarray, xa, xb, xc, s_fixed=None, state=None):
-        """Force on the rigid corner (N) and the segment parameter for one corner."""
+    def _force(self, k: int, corner: np.ndarray, xa, xb, xc, neighbour_normals, state=None):
+        """Force on the rigid corner (N), the segment parameter, the gap (mm), the contact state,
+        the tangential force (N) and the normal for one corner against one segment;
+        `neighbour_normals` (2 x 2, NaN where none) are the normals averaged in at its nodes."""
         p = self.problem
         edge = xb - xa
-        s = np.clip((corner - xa) @ edge / (edge @ edge), 0.0, 1.0) if s_fixed is None else s_fixed
-        normal = np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)
-        if normal @ (xa - xc) < 0:
-            normal = -normal  # outward from the deformable body
+        ends = _end_normals(_outward(edge[None], (xa - xc)[None])[0], neighbour_normals)
+        s = float(np.clip(_projection(corner - xa, edge, ends[0], ends[1]), 0.0, 1.0))
+        normal = ends[0] + s * (ends[1] - ends[0])
+        normal /= np.linalg.norm(normal)
         point = xa + s * edge
         gap = (corner - point) @ normal
         kappa = float(p.constants["gamma"].value * p.constants["E"].value)
@@ -120,12 +157,12 @@ class RigidCorners(Effect):
                 stick = state[1]
                 f_t = trial if stick else state[2] * bound
             force = force + f_t * tangent
-            return force, s, gap, (active, stick, np.sign(trial)), f_t
-        return force, s, gap, (active, True, 0.0), f_t
+            return force, s, gap, (active, stick, np.sign(trial)), f_t, normal
+        return force, s, gap, (active, True, 0.0), f_t, normal
 
-    def _find(self, corners: np.ndarray, u: np.ndarray):
+    def _find(self, corners: np.ndarray, u: np.ndarray, all_normals: np.ndarray):
         """Best segment on this rank for each corner: (distances, rows), the corner projecting
-        inside the segment and within the search distance (else inf, -1)."""
+        inside the segment along the smoothed normal and within the search distance (else inf, -1)."""
         n = len(corners)
         if not len(self.segments):
             return np.full(n, np.inf), np.full(n, -1)
@@ -133,11 +170,13 @@ class RigidCorners(Effect):
         a, b = self.segments[:, 0], self.segments[:, 1]
         xa, xb = self.coordinates[a] + u[a], self.coordinates[b] + u[b]
         edge = xb - xa
-        length2 = np.einsum("ij,ij->i", edge, edge)
+        ends = _end_normals(self._normals(u), self._neighbour_normals(slice(None), all_normals))
         arm = corners[:, None, :] - xa[None, :, :]  # corners x segments x 2
-        t = np.einsum("csj,sj->cs", arm, edge) / length2
-        distance = np.abs(edge[None, :, 0] * arm[:, :, 1] - edge[None, :, 1] * arm[:, :, 0]) / np.sqrt(length2)
-        distance[(t < -1e-9) | (t > 1 + 1e-9) | (distance > self.search)] = np.inf
+        t = _projection(arm, edge, ends[:, 0], ends[:, 1])
+        normal = ends[None, :, 0] + t[:, :, None] * (ends[None, :, 1] - ends[None, :, 0])
+        offset = arm - t[:, :, None] * edge[None]
+        distance = np.abs(np.einsum("csj,csj->cs", offset, normal)) / np.linalg.norm(normal, axis=2)
+        distance[~((t >= -1e-9) & (t <= 1 + 1e-9)) | (distance > self.search)] = np.inf
         rows = np.argmin(distance, axis=1)
         best = distance[np.arange(n), rows]
         return best, np.where(np.isfinite(best), rows, -1)
@@ -149,7 +188,8 @@ class RigidCorners(Effect):
         u = p.u.x.array
         comm = p.mesh.comm
         corners = self._placed()
-        distances, rows = self._find(corners, u)
+        all_normals = self._all_normals(u)
+        distances, rows = self._find(corners, u, all_normals)
         owners = np.zeros(len(rows), dtype=int)
         if comm.size > 1:
             owners = np.argmin(np.array(comm.allgather(distances)).reshape(comm.size, -1), axis=0)
@@ -160,22 +200,29 @@ class RigidCorners(Effect):
             self._old_segment = (self.coordinates[a] + self.u_old[2 * a: 2 * a + 2],
                                  self.coordinates[b] + self.u_old[2 * b: 2 * b + 2])
             xa, xb, xc = (self.coordinates[i] + u[2 * i: 2 * i + 2] for i in (a, b, c))
-            force, s, gap, state, f_t = self._force(k, corners[k], xa, xb, xc)
+            neighbour_normals = self._neighbour_normals(row, all_normals)
+            force, s, gap, state, f_t, normal = self._force(k, corners[k], xa, xb, xc, neighbour_normals)
             if state[0]:
-                yield k, (a, b, c), force, s, gap, state, f_t
+                yield k, (a, b, c), neighbour_normals, force, s, gap, state, f_t, normal
+
+    def _neighbour_normals(self, rows, all_normals: np.ndarray) -> np.ndarray:
+        """The normals averaged in at the two nodes of segments `rows` (an index or a slice):
+        (..., 2, 2), NaN where none."""
+        neighbours = self.neighbours[rows]
+        return np.where((neighbours >= 0)[..., None], all_normals[neighbours], np.nan)
 
     def contributions(self, with_jacobian: bool):
         """Per active corner on this rank: (dofs (4,), C entries (4,), dC/du (4x4), dC/dr (4 x n_r))."""
         out = []
         self.active[:] = False
-        for k, (a, b, c), force, s, gap, state, f_t in self._pressing():
+        for k, (a, b, c), neighbour_normals, force, s, gap, state, f_t, _ in self._pressing():
             self.active[k] = gap < 0  # pressing (a touching corner adds only its stiffness)
             self.tangential[k] = f_t
             dofs = np.array([2 * a, 2 * a + 1, 2 * b, 2 * b + 1], dtype=np.int32)
             entries = np.r_[(1 - s) * force, s * force]
             dC_du = dC_dr = None
             if with_jacobian:
-                dC_du, dC_dr = self._derivatives(k, (a, b, c), state)
+                dC_du, dC_dr = self._derivatives(k, (a, b, c), neighbour_normals, state)
             out.append((dofs, entries, dC_du, dC_dr))
         active = self.problem.mesh.comm.allreduce(int(self.active.sum()), op=MPI.SUM)
         return out, active
@@ -183,17 +230,16 @@ class RigidCorners(Effect):
     def point_contacts(self) -> list:
         """The pressing corners' forces on the deformable body (the hook's tuple); collective."""
         out = []
-        for _, (a, b, _), force, s, gap, state, _ in self._pressing():
+        for _, (a, b, _), _, force, s, gap, state, _, normal in self._pressing():
             if gap < 0:
-                xa, xb = (self.coordinates[i] + self.problem.u.x.array[2 * i: 2 * i + 2] for i in (a, b))
-                normal = np.array([xb[1] - xa[1], xa[0] - xb[0]]) / np.linalg.norm(xb - xa)
                 on_body = -force  # the corner pushes the body as the body pushes it back
                 f_n = abs(on_body @ normal)
                 out.append((a, b, s, f_n, on_body - (on_body @ normal) * normal, bool(state[1])))
         return out
 
-    def _derivatives(self, k, nodes, state, h=1e-9):
-        """Central differences of the C entries in the 4 segment dofs and the rigid dofs."""
+    def _derivatives(self, k, nodes, neighbour_normals, state, h=1e-9):
+        """Central differences of the C entries in the 4 segment dofs and the rigid dofs (the
+        neighbouring facets' normals held)."""
         p = self.problem
         a, b, c = nodes
         base_u = p.u.x.array
@@ -202,7 +248,7 @@ class RigidCorners(Effect):
 
         def entries(dx_a, dx_b, r):
             corner = self._placed(r)[k]
-            force, s, *_ = self._force(k, corner, x[a] + dx_a, x[b] + dx_b, x[c], state=state)
+            force, s, *_ = self._force(k, corner, x[a] + dx_a, x[b] + dx_b, x[c], neighbour_normals, state=state)
             return np.r_[(1 - s) * force, s * force]
 
         dC_du = np.zeros((4, 4))
@@ -257,3 +303,34 @@ class RigidCorners(Effect):
     def outputs(self) -> dict:
         return {"corner_contacts": self.active_count}
 
+
+
+def _outward(edge: np.ndarray, away: np.ndarray) -> np.ndarray:
+    """Unit normals of segments `edge` (m x 2) on the side of `away` (m x 2, a vector from a point
+    inside the body to the segment)."""
+    normal = np.stack([edge[:, 1], -edge[:, 0]], axis=1) / np.linalg.norm(edge, axis=1)[:, None]
+    return np.where((np.einsum("ij,ij->i", normal, away) < 0)[:, None], -normal, normal)
+
+
+def _end_normals(own: np.ndarray, neighbour_normals: np.ndarray) -> np.ndarray:
+    """Unit normals at the two nodes of segments whose own normals are `own` (..., 2): each the
+    mean with the neighbouring facet's normal where `neighbour_normals` (..., 2, 2) has one."""
+    ends = own[..., None, :] + np.nan_to_num(neighbour_normals)
+    return ends / np.linalg.norm(ends, axis=-1)[..., None]
+
+
+def _projection(arm, edge, normal_a, normal_b):
+    """Parameter s of the point xa + s edge whose interpolated normal (1 - s) normal_a + s normal_b
+    passes through the point xa + arm: the root near the straight projection of the quadratic
+    cross(arm - s edge, normal_a + s (normal_b - normal_a)) = 0 (NaN where there is none).
+    Broadcasts over leading axes."""
+    def cross(v, w):
+        return v[..., 0] * w[..., 1] - v[..., 1] * w[..., 0]
+    turn = normal_b - normal_a
+    quadratic = -cross(edge, turn)
+    linear = cross(arm, turn) - cross(edge, normal_a)
+    constant = cross(arm, normal_a)
+    root = np.sqrt(np.maximum(linear ** 2 - 4 * quadratic * constant, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -2 * constant / (linear + np.where(linear < 0, -root, root))
+    return np.where(linear ** 2 >= 4 * quadratic * constant, s, np.nan)
