@@ -15,19 +15,21 @@ from femcontact.errors import InputError
 
 
 def _box(q, radius, tiny, sides_only=False):
-    """Signed distance to a box given q = |xi| - half_sizes (rounded by `radius`).
+    """Signed distance to a box (a rectangle, or a cylinder in (rho, z)) given the two
+    q = |xi| - half_sizes (rounded by `radius`).
 
-    Written with an explicit inside/outside branch so that a point exactly on a face
-    (q_i = 0) gets that face's normal as gradient; the outside part is regularised by
-    `tiny` (mm) so its derivative stays finite on the edges of the branch. `sides_only`:
-    a point inside is pushed out through the side (q[0]) whatever the nearer face, so
-    the end faces take no contact from inside (a peg's tip face, see `tip_contact`)."""
-    outside = ufl.sqrt(sum(ufl.max_value(qi, 0) ** 2 for qi in q) + tiny ** 2) - tiny
-    inside = q[0]
-    is_outside = ufl.gt(q[0], 0)
-    for qi in q[1:]:
-        inside = inside if sides_only else ufl.max_value(inside, qi)
-        is_outside = ufl.Or(is_outside, ufl.gt(qi, 0))
+    Written with explicit branches so that the gradient (the contact normal) is a unit vector
+    everywhere: inside, the nearer face (a point exactly on a face, q_i = 0, gets that face's
+    normal); outside a face (one q_i > 0), the distance to that face; outside an edge (both
+    q_i > 0), the distance to it, sqrt(q_0^2 + q_1^2), with `tiny` (mm) under the root only so
+    its derivative stays finite in the branches not taken. `sides_only`: a point inside is
+    pushed out through the side (q[0]) whatever the nearer face, so the end faces take no
+    contact from inside (a peg's tip face, see `tip_contact`)."""
+    q0, q1 = q
+    edge = ufl.sqrt(ufl.max_value(q0, 0) ** 2 + ufl.max_value(q1, 0) ** 2 + tiny ** 2)
+    outside = ufl.conditional(ufl.And(ufl.gt(q0, 0), ufl.gt(q1, 0)), edge, ufl.max_value(q0, q1))
+    inside = q0 if sides_only else ufl.max_value(q0, q1)
+    is_outside = ufl.Or(ufl.gt(q0, 0), ufl.gt(q1, 0))
     return ufl.conditional(is_outside, outside, inside) - radius
 
 
