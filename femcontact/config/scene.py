@@ -348,6 +348,10 @@ def check_contact(scene: dict) -> None:
             problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
     if scene["geometry"] == "block":
         problems += _block_problems(scene)
+    support = scene.get("support")  # peg-in-hole scenes
+    if support and support["stiffness"] and support["model"] != "matrix":
+        problems.append(f"support.stiffness = {support['stiffness']}: read only with support.model = 'matrix' "
+                        f"(support.model = {support['model']!r})")
     if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
         problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
                         "set geometry = 'peg_in_hole' and rigid = 'peg'")
