@@ -201,12 +201,14 @@ class Simulation:
         return row
 
     def _predict(self, load) -> None:
-        """`predictor = 'extrapolate'` (`SolverOptions`): start from the last converged displacement plus the
-        last increment's change scaled to this dt (same step only). Under prescribed motion the
-        deformable body then follows a receding rigid body: started from the last state, the
-        contact would be open, Newton's first step (linearised without it) would relax the spring
-        through the rigid body, and the line search would creep back to the contact."""
-        if self.options.predictor != "extrapolate" or self.last_change is None:
+        """Where no rigid dof is free (the rigid body's motion is all prescribed), start from the
+        last converged displacement plus the last increment's change scaled to this dt (same step
+        only): the deformable body follows the prescribed motion, also where the rigid body
+        recedes and the contact would otherwise start open. Where a rigid dof is free (loads
+        given as forces), start from the last converged state: the body's pose may change
+        configuration between increments, and the extrapolated start costs more Newton
+        iterations (docs/stability.md, "The first guess of an increment")."""
+        if self.problem.rigid.free.any() or self.last_change is None:
             return
         step, dt, change = self.last_change
         if step == load.step and dt > 0:

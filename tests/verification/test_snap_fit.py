@@ -62,6 +62,21 @@ def test_flat_taper_force_ratio_equals_statics(angle, mu):
     assert m["withdrawal_force_ratio"] == pytest.approx(math.tan(alpha - math.atan(mu)), rel=1e-3)
 
 
+def test_the_concave_nose_goes_in_without_a_cut():
+    """The pin's motion is all prescribed, so each increment starts from the last converged
+    displacement plus the last increment's change (`Simulation._predict`): the concave nose of
+    `make snap_fit` (steep at its end, 80 increments per step) goes in and back out without a cut.
+    Started from the last converged state instead, 19 of its insertion increments were cut."""
+    from femcontact.families.snap_fit.metrics import run
+    from femcontact.solver.stepping import Simulation
+
+    simulation = Simulation(load_scene(SCENE, ["spring.count=1", "mesh.resolution=0.75", "steps.0.increments=80",
+                                               "steps.1.increments=80", 'peg.nose="concave"', "peg.nose_length=0.3"]))
+    run(simulation)
+    steps = [row["step"] for row in simulation.history]
+    assert steps.count("insert") == 80 and steps.count("withdraw") == 80
+
+
 def test_lateral_stiffness_is_cantilever_theory():
     """Frictionless, small deflection (interference 0.15 mm = 3 % of L): the spring's force on the
     shank over the interference is 3EI/L^3 = E b h^3 / 4L^3 (Timoshenko's shear term, 0.3 % here,
