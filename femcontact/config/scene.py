@@ -207,10 +207,6 @@ SOLVER = {
     "max_cuts": Field("int", 8, "times an increment may be halved after a Newton failure", min=0),
     "line_search": Field("bool", True, "line search: the full step if the residual norm falls, else the "
                          "root of R.d or backtracking"),
-    "predictor": Field("str", "none", "initial guess of an increment: 'none' (the last converged state) or "
-                       "'extrapolate' (plus the last increment's displacement change, scaled by dt, within a step): "
-                       "a contact that opens under prescribed motion (a withdrawal) then starts closed",
-                       choices=("none", "extrapolate")),
     "curved_step": Field("bool", False, "when a full Newton step does not lower |R|, try first a step along a "
                          "path that follows the residual's curvature (one more residual and one solve): a rigid "
                          "body sliding a curved surface (a rounded rim) over contact nodes stays on it"),
@@ -348,6 +344,10 @@ def check_contact(scene: dict) -> None:
             problems.append(f"steps[{i}].support_motion: a 'pulse' step cannot move the gripper (use 'ramp' or 'step')")
     if scene["geometry"] == "block":
         problems += _block_problems(scene)
+    support = scene.get("support")  # peg-in-hole scenes
+    if support and support["stiffness"] and support["model"] != "matrix":
+        problems.append(f"support.stiffness = {support['stiffness']}: read only with support.model = 'matrix' "
+                        f"(support.model = {support['model']!r})")
     if "compliant_support" in effects and (scene.get("rigid") != "peg" or scene["geometry"] != "peg_in_hole"):
         problems.append(f"effects = {effects}: 'compliant_support' holds a rigid peg in a hole, "
                         "set geometry = 'peg_in_hole' and rigid = 'peg'")

@@ -25,9 +25,6 @@ class SolverOptions:
     """Times an increment may be halved after a Newton failure."""
     line_search: bool
     """Damp a step that does not lower |R| (`SchurNewton.line_search`); off: always the full step."""
-    predictor: str
-    """Initial guess of an increment: 'none' (the last converged state) or 'extrapolate' (plus
-    the last increment's displacement change scaled to this dt, within a step)."""
     curved_step: bool
     """Before damping, retry a rejected full step along the residual's curvature."""
     contact_update: bool

@@ -6,6 +6,8 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
   their values without recompiling forms);
 - `build(problem)`: add terms with `problem.add_bulk`, `add_contact_term`, `add_traction`;
 - `begin_increment(load)` / `commit(dt)`: before an increment / after it converged;
+- `lock_contacts(on)`: a friction law made to stick everywhere (on) or the scene's again (off),
+  True if the effect has one (the solver's last way into an increment);
 - `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
 - `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
 - `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
@@ -37,6 +39,9 @@ class Effect:
 
     def commit(self, dt: float) -> None:
         pass
+
+    def lock_contacts(self, on: bool) -> bool:
+        return False
 
     def state(self) -> dict:
         return {}

@@ -28,6 +28,9 @@ from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
 
 
+STUCK_MU = 1e6  # a friction coefficient under which every touching point sticks (`lock_contacts`)
+
+
 class Friction(Effect):
     name = "friction"
 
@@ -65,6 +68,11 @@ class Friction(Effect):
         size = problem.model.h_contact
         self.projection_form = fem.form(ufl.inner(w, v) * problem.ds_contact + 1e-10 * size * ufl.inner(w, v) * problem.dx)
         self.projection = None
+
+    def lock_contacts(self, on: bool) -> bool:
+        """mu = STUCK_MU (on) or the scene's mu (off)."""
+        self.problem.constants["mu"].value = STUCK_MU if on else self.problem.scene["contact"]["mu"]
+        return True
 
     def commit(self, dt: float) -> None:
         """Move each anchor so that -gamma_T (xi - anchor) equals the converged tangential

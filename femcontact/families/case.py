@@ -204,19 +204,16 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
         if scene["outputs"]["fields"]:  # frames from here on: a restart's series begins at its checkpoint
             series = FieldSeries(simulation, case_dir, fields)
             simulation.listeners.append(series)
-        if family and family.run_steps:  # e.g. a snap fit's jam ends the run as an outcome, not a failure
-            family.run_steps(simulation, first_step)
-        else:
-            run_on = RunOn(simulation)
-            if "inertia" in scene["effects"]:
-                simulation.events.append(run_on)
-            try:
-                simulation.run(first_step)
-            except SimulationFailed as failure:
-                verdict = no_equilibrium(simulation, failure)
-                if verdict is None:
-                    raise
-            verdict = verdict or run_on.verdict
+        run_on = RunOn(simulation)
+        if "inertia" in scene["effects"]:
+            simulation.events.append(run_on)
+        try:
+            simulation.run(first_step)
+        except SimulationFailed as failure:
+            verdict = no_equilibrium(simulation, failure)
+            if verdict is None:
+                raise
+        verdict = verdict or run_on.verdict
     finally:
         for listener in listeners:
             listener.close()

@@ -63,9 +63,6 @@ class Family:
     prefix_omits: tuple[str, ...] = ()
     """Scene tables read only after a study's shared steps: a shared prefix's scene leaves them out,
     so cases that differ only in them compute their first steps once."""
-    run_steps: Callable | None = None
-    """run_steps(simulation, first_step): how a contact run steps through its scene, when an outcome such
-    as a jam ends it (None: every step, a load without static equilibrium ending it as an outcome)."""
     metrics: Callable | None = None
     """metrics(simulation) -> dict: the family's metrics of a finished contact run."""
     outcome_metrics: Callable[[dict], dict] | None = None

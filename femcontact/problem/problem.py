@@ -226,6 +226,11 @@ class Problem:
         for component in self.components:
             component.begin_increment(load)
 
+    def lock_contacts(self, on: bool) -> bool:
+        """Every contact point sticks (on) or follows the scene's friction law again (off);
+        False if no effect has a friction law to change."""
+        return any([component.lock_contacts(on) for component in self.components])
+
     def commit(self, dt: float) -> None:
         """Accept the converged increment: each effect updates its history, then the pose."""
         for component in self.components:

@@ -230,7 +230,8 @@ class DynamicSimulation(Simulation):
 
         Increments end on the pulse kinks (start, peak, end of each pulse), so the peak load
         is applied exactly. dt starts at dt_max; it is divided by 4 on a solver failure (down
-        to dt_min; Newton gets at most `DYNAMIC_ITERATIONS` iterations), cut when an increment
+        to dt_min; Newton gets at most `DYNAMIC_ITERATIONS` iterations), also one while locating
+        the event inside the increment (its re-solves start from the increment's start), cut when an increment
         raises the body by more than `max_rise_per_increment` (mm; to 0.8 of it for a lift
         growing like dt^2), and doubled back after an increment of at most 8 iterations.
         A step whose load is periodic (a pulse train; a constant load with any period,
@@ -290,8 +291,15 @@ class DynamicSimulation(Simulation):
                 zones = self.zone_forces()
                 hit = self._event(event, rise, zones)
                 if hit:
+                    try:
+                        t_event = self._locate(hit, event, index, t, dt, committed, y0, previous, rise, outcome)
+                    except (NewtonFailure, RuntimeError, FloatingPointError):
+                        if dt <= dt_min:
+                            raise
+                        p.restore(committed)  # locate it again within a shorter increment
+                        dt = max(dt / 4, dt_min)
+                        continue
                     outcome.before_event = committed
-                    t_event = self._locate(hit, event, index, t, dt, committed, y0, previous, rise, outcome)
                     outcome.event, outcome.time = hit, float(self.schedule.start_times[index] + t_event)
                     if self.listeners:  # the state at the event closes the output
                         self.record(self.recorder.row(self.schedule.load(index, t_event, t_event - t), 0))

@@ -143,12 +143,15 @@ class Simulation:
             try:
                 row = self.increment(load)
             except NewtonFailure as error:
-                if cuts >= max_cuts:
+                if cuts < max_cuts:
+                    cuts += 1
+                    dt /= 2
+                    continue
+                try:
+                    row = self.increment(load, locked_first=True)
+                except NewtonFailure:
                     raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
                                            f"after {cuts} cuts: {error}", index, load) from None
-                cuts += 1
-                dt /= 2
-                continue
             self.record(row, cuts)
             stop = step["stop"]
             if stop["column"] and abs(row.get(stop["column"], 0.0)) > stop["value"]:
@@ -162,9 +165,12 @@ class Simulation:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
         return True
 
-    def increment(self, load) -> dict:
-        """Solve one increment from the last converged state (restored on any failure);
-        returns its output row, computed before the history moves on."""
+    def increment(self, load, locked_first: bool = False) -> dict:
+        """Solve one increment from the last converged state (restored on any failure): the
+        plain Newton solve, then the stabilised and the pseudo-transient continuation, or
+        (`locked_first`, the last try of an increment that failed at every cut) every contact
+        stuck first (`locked_first_solve`); returns its output row, computed before the history
+        moves on."""
         from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
@@ -175,19 +181,21 @@ class Simulation:
             self._predict(load)
             self.prescribe(load)
             self.stabilization_force = 0.0
-            try:
-                iterations = self.newton.solve(load)
-            except NewtonFailure:
-                p.restore(state)
-                self.prescribe(load)
+            if locked_first:
+                ways = [self.locked_first_solve]
+            else:
+                ways = [self.newton.solve, self.stabilized_solve]
+                if self.pseudo_transient_exhausted != load.step:
+                    ways.append(self.pseudo_transient_solve)
+            for k, way in enumerate(ways):
                 try:
-                    iterations = self.stabilized_solve(load)
+                    iterations = way(load)
+                    break
                 except NewtonFailure:
-                    if self.pseudo_transient_exhausted == load.step:
+                    if k == len(ways) - 1:
                         raise
                     p.restore(state)
                     self.prescribe(load)
-                    iterations = self.pseudo_transient_solve(load)
         except BaseException:
             p.restore(state)
             raise
@@ -201,12 +209,14 @@ class Simulation:
         return row
 
     def _predict(self, load) -> None:
-        """`predictor = 'extrapolate'` (`SolverOptions`): start from the last converged displacement plus the
-        last increment's change scaled to this dt (same step only). Under prescribed motion the
-        deformable body then follows a receding rigid body: started from the last state, the
-        contact would be open, Newton's first step (linearised without it) would relax the spring
-        through the rigid body, and the line search would creep back to the contact."""
-        if self.options.predictor != "extrapolate" or self.last_change is None:
+        """Where no rigid dof is free (the rigid body's motion is all prescribed), start from the
+        last converged displacement plus the last increment's change scaled to this dt (same step
+        only): the deformable body follows the prescribed motion, also where the rigid body
+        recedes and the contact would otherwise start open. Where a rigid dof is free (loads
+        given as forces), start from the last converged state: the body's pose may change
+        configuration between increments, and the extrapolated start costs more Newton
+        iterations (docs/stability.md, "The first guess of an increment")."""
+        if self.problem.rigid.free.any() or self.last_change is None:
             return
         step, dt, change = self.last_change
         if step == load.step and dt > 0:
@@ -297,6 +307,23 @@ class Simulation:
         raise NewtonFailure(f"the rigid body did not come to rest by pseudo-transient continuation "
                             f"({failures} failed pseudo steps, {spent} Newton iterations; it moved by "
                             f"{np.array2string(travel, precision=4)} (mm, rad))", [])
+
+    def locked_first_solve(self, load) -> int:
+        """The increment solved with every contact point stuck (`Problem.lock_contacts`), then with
+        the scene's friction law from there. Where Newton cycles between stick and slip (a
+        snap-fit apex pushed along a steep nose: no sliding equilibrium exists) the state in
+        which nothing slips during the increment may be an equilibrium of the real law, and is
+        then found from it."""
+        from femcontact.solver.newton import NewtonFailure
+
+        p = self.problem
+        if not p.lock_contacts(True):
+            raise NewtonFailure("no contact law to lock", [])
+        try:
+            iterations = self.newton.solve(load)
+        finally:
+            p.lock_contacts(False)
+        return iterations + self.newton.solve(load)
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""

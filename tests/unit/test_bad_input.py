@@ -139,9 +139,11 @@ DISLODGING = str(SCENES / "dislodging_2d.toml")
     (INSERTION, ["support.model='matrix'", "support.stiffness=[10, 20, 0, 20, 10, 0, 0, 0, 1]"],
      "not positive definite (smallest eigenvalue -10)"),  # positive diagonal, eigenvalues 30, -10, 1
     (INSERTION, ["support.model='matrix'", "support.stiffness=[10, 1, 0, 0, 10, 0, 0, 0, 1]"], "must be symmetric"),
+    (INSERTION, ["support.stiffness=[1.0, 2.0]"],
+     "support.stiffness = [1.0, 2.0]: read only with support.model = 'matrix' (support.model = 'springs')"),
     (DISLODGING, ["steps.2.increments=10000000"], "steps[2].increments = 10000000: 10000215 increments in all"),
 ], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
-        "asymmetric stiffness", "dislodging increments"])
+        "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments"])
 def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, scene, assignments, fragment):
     out = tmp_path / "out"
     assert_refused(*cli(capsys, "run", scene, *sets(*assignments), "--out", out), Path(scene).name, fragment)

@@ -83,11 +83,11 @@ def test_solver_options_carry_every_solver_key_of_the_scene():
     from femcontact.config.scene import SOLVER
     from femcontact.config.solver import SCENE_KEYS, solver_options
 
-    scene = resolve_scene(BASE, ["solver.rtol=1e-7", "solver.predictor='extrapolate'", "solver.petsc_options={pc_type='lu'}"])
+    scene = resolve_scene(BASE, ["solver.rtol=1e-7", "solver.curved_step=true", "solver.petsc_options={pc_type='lu'}"])
     options = solver_options(scene)
     assert set(SCENE_KEYS) == set(SOLVER)
     assert {key: getattr(options, key) for key in SOLVER} == scene["solver"]
-    assert options.rtol == 1e-7 and options.predictor == "extrapolate" and options.petsc_options == {"pc_type": "lu"}
+    assert options.rtol == 1e-7 and options.curved_step is True and options.petsc_options == {"pc_type": "lu"}
     with pytest.raises(dataclasses.FrozenInstanceError):
         options.rtol = 1.0
     with pytest.raises(TypeError):

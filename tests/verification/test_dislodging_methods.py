@@ -99,6 +99,18 @@ def wedged(tmp_path_factory):
     return scene, MethodPuller(scene, checkpoint=checkpoint), checkpoint
 
 
+def test_twist_at_the_pullout_force_is_located_where_a_re_solve_fails(wedged):
+    """Moment pulses of peak P d (the quasi-static pull-out P = 5.566 N on the coarse peg, twice the
+    twist threshold of docs/dislodging_methods.md) open both contacts within the first rising half
+    pulse (10 ms at 50 Hz). Bisecting the opening inside the first increment that sees it, a re-solve
+    from that increment's start does not converge (the residual cycles 63, 66, 180 N): the integrator
+    cuts that increment and locates the opening inside a shorter one."""
+    scene, puller, _ = wedged
+    row = puller.run("twist", puller.pullout["quasi_static_pullout_N"])
+    assert row["dislodged"] and row["event"] == "open"
+    assert 0 < row["dislodge_time_s"] < 0.5 / 50.0
+
+
 def test_optimum_is_verified_by_a_fresh_simulation(wedged):
     """A tiny optimisation on the coarse wedged peg (one grid point per shape, 2 Nelder-Mead
     pulls each): the best pulse dislodges, and a fresh simulation (new solver, state read from

@@ -17,11 +17,11 @@ SHORT = ["steps.0.motion.y=-0.34", "steps.0.increments=10"]  # 0.05 gap, 0.26 on
 
 
 def simulate(overrides: list[str]) -> dict:
-    from femcontact.families.snap_fit.metrics import run, snap_fit_metrics
+    from femcontact.families.snap_fit.metrics import snap_fit_metrics
     from femcontact.solver.stepping import Simulation
 
     simulation = Simulation(load_scene(SCENE, overrides))
-    run(simulation)
+    simulation.run()
     return snap_fit_metrics(simulation)
 
 

@@ -17,11 +17,6 @@ import numpy as np
 from femcontact.families.dislodging.pull import OBSERVE_STEP, PULL_STEP, Puller
 from femcontact.problem.loading import Schedule
 
-RETRIES = 2
-"""A pull whose Newton iteration fails (seen while locating the opening of a twisted peg: the rigid
-step swung back and forth) is run again from the wedged state with dt_max and the rise cap / 4."""
-
-
 def unwedging_sign(scene: dict) -> float:
     """Sense (+1 counter-clockwise) of the moment that turns the peg back out of its wedge:
     against the wedging moment of the first step."""
@@ -118,26 +113,18 @@ class MethodPuller(Puller):
         """One dynamic pull from the wedged state; its row."""
         from femcontact.solver.dynamics import Event
 
-        from femcontact.solver.newton import NewtonFailure
-
         s, sim = self.settings, self.simulation
         start = time.perf_counter()
-        for retry in range(RETRIES + 1):  # a Newton failure while locating the event: again with finer steps
-            sim.resume(self.wedged)
-            loads = self.set_loads(method, magnitude, frequency, duty, shape)
-            try:
-                outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"] / 4 ** retry,
-                                        s["dt_min"], s["max_rise_per_increment"] / 4 ** retry,
-                                        settle_period=1 / frequency if method != "continuous" else 0.01)
-                break
-            except (NewtonFailure, RuntimeError, FloatingPointError):
-                if retry == RETRIES:
-                    raise
+        sim.resume(self.wedged)
+        loads = self.set_loads(method, magnitude, frequency, duty, shape)
+        outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
+                                s["max_rise_per_increment"],
+                                settle_period=1 / frequency if method != "continuous" else 0.01)
         row = {"case": s["case"], "method": method, "magnitude_N": float(magnitude),
                "pulse_hz": frequency if method != "continuous" else "", "duty": duty if method != "continuous" else "",
                "shape": shape if method != "continuous" else "", "dislodged": outcome.event is not None,
                "event": outcome.event or "", "dislodge_time_s": "", "increments": outcome.increments,
-               "newton_iterations": outcome.newton_iterations, "settled": outcome.settled, "retries": retry,
+               "newton_iterations": outcome.newton_iterations, "settled": outcome.settled,
                "wall_s": time.perf_counter() - start}
         duration = sim.scene["steps"][PULL_STEP]["duration"]
         elapsed = outcome.time - float(sim.schedule.start_times[PULL_STEP]) if outcome.event else duration

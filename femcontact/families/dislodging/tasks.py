@@ -22,7 +22,7 @@ from femcontact.families.dislodging.pullout_3d import run_3d
 
 PULL_COLUMNS = ["case", "method", "phase", "magnitude_N", "peak_force_N", "pulse_hz", "duty", "shape", "dislodged",
                 "event", "dislodge_time_s", "impulse_Ns", "applied_impulse_Ns", "objective_Ns", "increments",
-                "newton_iterations", "settled", "retries", "wall_s"]
+                "newton_iterations", "settled", "wall_s"]
 
 
 def run_case(scene: dict, case_dir: Path, checkpoint: bool = False, restart=None) -> dict:

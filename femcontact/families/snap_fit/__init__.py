@@ -5,7 +5,7 @@ from femcontact.families.snap_fit import metrics, report
 
 FAMILY = Family(
     name="snap_fit", doc="docs/snap_fit.md", claims=lambda scene: scene["geometry"] == "snap_fit",
-    run_steps=metrics.run, metrics=metrics.snap_fit_metrics,
+    metrics=metrics.snap_fit_metrics,
     plots={"force_curves": report.write_force_curves, "sweep": report.write_sweep, "jam_map": report.write_jam_map},
     tables=report.table,
     accuracy=Accuracy("femcontact.families.snap_fit.metrics:accuracy_rows",

@@ -18,16 +18,14 @@ history is per mm of out-of-plane width; every force here (N) is multiplied by
   increment (1) the apex of spring B is in contact with the nose and its force lies strictly
   inside the friction cone about the nose's normal, i.e. the apex sticks to the nose and is
   pushed along instead of sliding (`STICK_MARGIN`); or (2) the spring buckles: the axial force
-  at its root exceeds the Euler load of a cantilever, pi^2 EI / (4 L^2) (`buckling_ratio`);
+  at its root exceeds the Euler load of a cantilever, pi^2 EI / (4 L^2) (`buckling_ratio`).
+  Where no sliding equilibrium exists Newton cycles between stick and slip; the solver's last try
+  of such an increment, every contact stuck first (`Simulation.locked_first_solve`), finds the
+  stuck apex, which criterion 1 flags;
 - max_insertion_slope: the steepest rise of the insertion force, max dF_ax/d(depth) (N/mm), and
   its ratio to k = 3EI/L^3: how fast the force runs away. Not a jam criterion: measured on the
   study's spring, sliding within 10 % of the reduced model's bound rises at up to 60 k, the stuck
   (jammed) apex at 103-151 k, too close for a robust threshold;
-- `run` (what `femcontact run` calls for this family): an insertion increment that Newton cannot
-  solve (it cycles between stick and slip where no sliding equilibrium exists) is solved once
-  more with the apex stuck (`stuck_increment`); if the stuck state is an equilibrium of the real
-  friction law, the run ends there as a jam (criterion 1 then flags that increment,
-  `stopped` says why) instead of failing;
 - max_von_mises, yield_ratio (its ratio to the spring's yield stress), yielded: the FE field's
   largest value, which includes the stress concentration at the sharp apex under contact;
 - root_stress: the beam stress at the root of spring B, 6 |M| / h^2 + |N| / h (MPa) from the
@@ -46,7 +44,6 @@ from femcontact.families.repository import SCENES
 RATIO_FLOOR = 0.1    # lateral force / its peak below which a ratio is not averaged (first touch, last contact)
 STICK_MARGIN = 0.02  # |F_t| < (1 - margin) mu F_n: inside the friction cone, not on its edge (sliding)
 NOSE_MARGIN = 0.02   # contact counts as on the nose below z = (1 - margin) H
-STICK_MU = 1e6       # friction coefficient of the stuck trial: every contact point sticks
 SCENE = SCENES / "snap_fit_2d.toml"
 
 
@@ -153,65 +150,6 @@ def jamming(scene: dict, rows: list[dict], insert: dict, mu: float) -> dict:
             "max_insertion_slope": float(slope.max(initial=0.0)), "max_insertion_slope_over_k": float(slope.max(initial=0.0) / k)}
 
 
-def run(simulation, first_step: int = 0) -> None:
-    """Run a snap-fit simulation step by step. An insertion increment that fails after all cuts
-    is tried once more, over the step's nominal increment, with the apex stuck to the nose
-    (`stuck_increment`); if that is an equilibrium of the real friction law, the run ends there
-    (`simulation.stopped`), a jam; otherwise the failure stands."""
-    from femcontact.solver.stepping import SimulationFailed
-
-    for index, step in enumerate(simulation.scene["steps"][first_step:], start=first_step):
-        try:
-            if not simulation.run_step(index, step):
-                return
-        except SimulationFailed as failure:
-            if step["name"] != "insert" or not stuck_increment(simulation, index, step):
-                raise
-            simulation.stopped = (f"step 'insert' jammed at depth {simulation.history[-1]['rigid_y'] * -1 - simulation.scene['peg']['start_gap']:.4g} mm: "
-                                  f"Newton found no equilibrium after {simulation.scene['solver']['max_cuts']} cuts "
-                                  f"({str(failure).split(';')[0].split(': ')[-1]}); the apex stuck to the nose is one, "
-                                  "its force inside the friction cone")
-            return
-
-
-def stuck_increment(simulation, index: int, step: dict) -> bool:
-    """Solve the next increment (nominal length) from the last converged state with friction
-    coefficient `STICK_MU` (the apex sticks), then with the scene's mu from there: if the real law
-    accepts the state (Newton converges) and the apex's force lies inside the friction cone, record
-    it and return True; else restore, False."""
-    from femcontact.solver.newton import NewtonFailure
-
-    p = simulation.problem
-    if "mu" not in p.constants:
-        return False
-    mu, real = p.constants["mu"], float(p.constants["mu"].value)
-    start = simulation.schedule.start_times[index]
-    done = max([row["time"] - start for row in simulation.history if row["step"] == step["name"]], default=0.0)
-    dt = step["duration"] / step["increments"]
-    load = simulation.schedule.load(index, min(done + dt, step["duration"]), dt)
-    state = p.state()
-    try:
-        p.begin_increment(load)
-        simulation.prescribe(load)
-        mu.value = STICK_MU
-        iterations = simulation.newton.solve(load)
-        mu.value = real
-        iterations += simulation.newton.solve(load)
-    except NewtonFailure:
-        p.restore(state)
-        return False
-    finally:
-        mu.value = real
-    row = simulation.recorder.row(load, iterations)
-    f = forces(simulation.scene, [row])
-    if not (f["normal"][0] > 0 and abs(f["tangential"][0]) < (1 - STICK_MARGIN) * real * f["normal"][0]):
-        p.restore(state)
-        return False
-    p.commit(load.dt)
-    simulation.record(row)
-    return True
-
-
 def root_stress(scene: dict, rows: list[dict]) -> float:
     """Largest beam stress (MPa) at the root of spring B over the rows: bending 6 |M| / h^2 plus
     axial |N| / h, from the root's reactions per mm of width (the moment recorded about the origin
@@ -256,7 +194,7 @@ def accuracy_case(knob: str, setting: str, overrides: list[str]) -> dict:
     start = time.perf_counter()
     scene = load_scene(SCENE, overrides)
     simulation = Simulation(scene)
-    run(simulation)
+    simulation.run()
     m = snap_fit_metrics(simulation)
     return {"knob": knob, "setting": setting, "dofs": simulation.dofs, "wall_time": time.perf_counter() - start,
             "newton_iterations": sum(row["newton_iterations"] for row in simulation.history),
