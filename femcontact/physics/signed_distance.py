@@ -21,13 +21,14 @@ def _box(q, radius, tiny, sides_only=False):
     (q_i = 0) gets that face's normal as gradient; the outside part is regularised by
     `tiny` (mm) so its derivative stays finite on the edges of the branch. `sides_only`:
     a point inside is pushed out through the side (q[0]) whatever the nearer face, so
-    the end faces take no contact from inside (a peg's tip face, see `tip_contact`)."""
+    the end faces take no contact from inside (a peg's tip face, see `tip_contact`), also
+    within `radius` of them."""
     outside = ufl.sqrt(sum(ufl.max_value(qi, 0) ** 2 for qi in q) + tiny ** 2) - tiny
     inside = q[0]
     is_outside = ufl.gt(q[0], 0)
     for qi in q[1:]:
         inside = inside if sides_only else ufl.max_value(inside, qi)
-        is_outside = ufl.Or(is_outside, ufl.gt(qi, 0))
+        is_outside = ufl.Or(is_outside, ufl.gt(qi, radius if sides_only else 0))
     return ufl.conditional(is_outside, outside, inside) - radius
 
 
