@@ -32,6 +32,39 @@ def _box(q, radius, tiny, sides_only=False):
     return ufl.conditional(is_outside, outside, inside) - radius
 
 
+def _to_segment(p, a, b, tiny):
+    """Distance (mm) from the point p to the segment a-b, in a plane (regularised by `tiny`)."""
+    ex, ez = b[0] - a[0], b[1] - a[1]
+    t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ex + (p[1] - a[1]) * ez) / (ex * ex + ez * ez), 1.0), 0.0)
+    return ufl.sqrt((p[0] - a[0] - t * ex) ** 2 + (p[1] - a[1] - t * ez) ** 2 + tiny ** 2) - tiny
+
+
+def _chamfered(rigid, half, across, along, tiny, sides_only):
+    """Signed distance to a peg (half width or radius `half`, centred, axis along) whose tip
+    edge is cut by a chamfer of `chamfer_width` at `chamfer_angle` (deg) from the axis: the convex
+    outline tip face, chamfer, side, top face in (across, along). Inside, the largest distance
+    to the four faces' lines (each face's normal as gradient, also on the face); outside, the
+    distance to the nearest face. `sides_only`: inside, only the side and the chamfer count."""
+    width = rigid["chamfer_width"]
+    height = width / np.tan(np.radians(rigid["chamfer_angle"]))
+    h = rigid["length"] / 2
+    corners = [(0.0, -h), (half - width, -h), (half, height - h), (half, h), (0.0, h)]
+    slant = np.hypot(width, height)
+    lines = {"tip": -along - h, "chamfer": ((across - half + width) * height - (along + h) * width) / slant,
+             "side": across - half, "top": along - h}
+    outside_distances = [_to_segment((across, along), a, b, tiny) for a, b in zip(corners[:-1], corners[1:])]
+    is_outside = ufl.gt(lines["tip"], 0)
+    for name in ("chamfer", "side", "top"):
+        is_outside = ufl.Or(is_outside, ufl.gt(lines[name], 0))
+    faces = ("chamfer", "side") if sides_only else ("tip", "chamfer", "side", "top")
+    inside, outside = lines[faces[0]], outside_distances[0]
+    for name in faces[1:]:
+        inside = ufl.max_value(inside, lines[name])
+    for distance in outside_distances[1:]:
+        outside = ufl.min_value(outside, distance)
+    return ufl.conditional(is_outside, outside, inside)
+
+
 def reference_point(rigid: dict) -> np.ndarray:
     """The shape's reference point in its local frame (tip-centred for pegs)."""
     if rigid["shape"] in ("rectangle", "cylinder"):
@@ -47,15 +80,13 @@ def signed_distance(rigid: dict, xi):
     `rigid["scale"]` is a float size (mm) used for regularisation."""
     shape = rigid["shape"]
     tiny = 1e-15 * 10.0 ** round(np.log10(max(rigid["scale"], 1.0)))  # a decade, so it rarely changes the form
-    if shape == "rectangle":
-        r = rigid["corner_radius"]
-        q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]
-        return _box(q, r, tiny, not rigid.get("tip_contact", True))
-    if shape == "cylinder":
-        r = rigid["corner_radius"]
-        rho = ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
-        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny,
-                    not rigid.get("tip_contact", True))
+    if shape in ("rectangle", "cylinder"):  # a peg: across its axis |x| (2-D) or rho (3-D), along it z
+        half, r = rigid["half_width" if shape == "rectangle" else "radius"], rigid["corner_radius"]
+        across = abs(xi[0]) if shape == "rectangle" else ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
+        along, sides_only = xi[len(xi) - 1], not rigid.get("tip_contact", True)
+        if rigid.get("chamfer_width", 0.0) > 0:
+            return _chamfered(rigid, half, across, along, tiny, sides_only)
+        return _box([across - (half - r), abs(along) - (rigid["length"] / 2 - r)], r, tiny, sides_only)
     if shape in ("disc", "sphere"):
         return ufl.sqrt(ufl.dot(xi, xi)) - rigid["radius"]
     if shape == "cylinder_y":
@@ -99,8 +130,7 @@ def _pin_2d(pieces, pin_length, xi, tiny):
         a, b = np.asarray(piece[-2], float), np.asarray(piece[-1], float)
         if piece[0] == "segment":
             ab = b - a
-            t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / (ab @ ab), 1.0), 0.0)
-            distances.append(length([p[0] - a[0] - t * ab[0], p[1] - a[1] - t * ab[1]]))
+            distances.append(_to_segment(p, a, b, tiny))
             r_of_z = a[0] + (xi[1] - a[1]) * ab[0] / ab[1] if ab[1] > 0 else None
         else:
             centre, R = np.asarray(piece[1], float), piece[2]
