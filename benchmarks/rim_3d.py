@@ -42,14 +42,13 @@ def case(radius: float, h_contact: float) -> dict:
     simulation = Simulation(load_scene(SCENE, overrides), MPI.COMM_WORLD)
     simulation.run()
     last = simulation.history[-1]
-    return {"corner_radius": radius, "h_contact": h_contact, "dofs": simulation.dofs,
+    return {"corner_radius": radius, "h_contact": h_contact, "ranks": MPI.COMM_WORLD.size, "dofs": simulation.dofs,
             "newton": sum(row["newton_iterations"] for row in simulation.history),
             "force_B": last["contact_B_force"], "z_B": last["contact_B_z"], "tilt_deg": last["tilt_deg"],
             **peak_by_block(simulation), "seconds": time.perf_counter() - start}
 
 
 def page(rows: list[dict], radius: float, seconds: float) -> str:
-    ranks = MPI.COMM_WORLD.size
     table = markdown_table(
         ["h_c (mm)", "dofs", "sharp rim: peak von Mises B / A (MPa)", f"rim radius {radius:g} mm: B / A (MPa)",
          "force at B sharp / rounded (N)", "Newton sharp / rounded"],
@@ -59,10 +58,10 @@ def page(rows: list[dict], radius: float, seconds: float) -> str:
          for h, sharp, round_ in pairs(rows)], formats=["{:g}", None, None, None, None, None])
     return "\n".join([
         "# 3-D wedging: peak stress under a sharp and a rounded tip rim", "",
-        f"`python -m benchmarks.rim_3d` on {ranks} rank(s), {seconds:.0f} s. scenes/wedging_3d.toml loaded "
-        f"(My = -1000 N*mm), mesh resolution {RESOLUTION}, contact zones of radius {CONTACT_ZONE} mm. "
+        f"`python -m benchmarks.rim_3d` on {rows[0]['ranks']} rank(s), {seconds:.0f} s. scenes/wedging_3d.toml "
+        f"loaded (My = -1000 N*mm), mesh resolution {RESOLUTION}, contact zones of radius {CONTACT_ZONE} mm. "
         "B: the block's half under the peg's tip rim; A: the half with the hole's sharp mouth edge. "
-        "See docs/wedging_3d.md.", "", *table]) + "\n"
+        "See docs/wedging_3d.md.", "", "## Peak von Mises at the end of the load", "", *table]) + "\n"
 
 
 def pairs(rows: list[dict]):
