@@ -151,12 +151,38 @@ def _pin_2d(pieces, pin_length, xi, tiny):
     return ufl.conditional(inside, -distance, distance)
 
 
+def _peg_profile(rigid: dict) -> np.ndarray:
+    """Half outline (across, along) of a peg about its centre, from the tip centre to the top
+    centre, with its rounded corners (sampled) or its tip chamfer."""
+    from geometry.placement import peg_profile
+
+    half = rigid["half_width"] if rigid["shape"] == "rectangle" else rigid["radius"]
+    peg = {"width": 2 * half, **{key: rigid[key] for key in ("length", "corner_radius", "chamfer_width", "chamfer_angle")}}
+    return peg_profile(peg) - [0.0, rigid["length"] / 2]
+
+
+def _revolved(profile: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, triangles) of the surface swept by a half outline (across, along) from pole to
+    pole round the axis along z, in `points` angles."""
+    angle = np.linspace(0, 2 * np.pi, points, endpoint=False)
+    rings = profile[1:-1]
+    vertices = np.vstack([np.c_[rho * np.cos(angle), rho * np.sin(angle), np.full(points, z)] for rho, z in rings]
+                         + [[[0.0, 0.0, profile[0, 1]], [0.0, 0.0, profile[-1, 1]]]])
+    k, k1 = np.arange(points), (np.arange(points) + 1) % points
+    bands = [np.vstack([np.c_[a + k, a + k1, a + points + k], np.c_[a + k1, a + points + k1, a + points + k]])
+             for a in range(0, (len(rings) - 1) * points, points)]
+    tip, top, last = len(rings) * points, len(rings) * points + 1, (len(rings) - 1) * points
+    caps = [np.c_[np.full(points, tip), k1, k], np.c_[np.full(points, top), last + k, last + k1]]
+    return vertices, np.vstack(bands + caps)
+
+
 def outline(rigid: dict, points: int = 64) -> np.ndarray:
     """Closed polyline (P x 3, local frame about the reference point) of a 2-D shape, for pictures."""
     shape = rigid["shape"]
     if shape == "rectangle":
-        w, h = rigid["half_width"], rigid["length"] / 2
-        xy = np.array([[-w, -h], [w, -h], [w, h], [-w, h], [-w, -h]])
+        right = _peg_profile(rigid)[1:-1]
+        left = right[::-1] * [-1.0, 1.0]
+        xy = np.vstack([right, left, right[:1]])
     elif shape == "disc":
         t = np.linspace(0, 2 * np.pi, points)
         xy = rigid["radius"] * np.c_[np.cos(t), np.sin(t)]
@@ -171,23 +197,17 @@ def outline(rigid: dict, points: int = 64) -> np.ndarray:
 
 def surface(rigid: dict, points: int = 48) -> tuple[np.ndarray, np.ndarray]:
     """Triangulated surface (vertices P x 3 in the local frame about the reference point, triangles
-    T x 3) of a 3-D shape, for pictures: a cylinder with its end caps, the indenter's cylinder
-    (axis y, 4 radii long), the snap-fit pin's section swept over z = +-half_width; empty for others."""
+    T x 3) of a 3-D shape, for pictures: a peg or flat punch with its end caps (rims rounded or
+    chamfered as the shape is), the indenter's cylinder (axis y, 4 radii long), the snap-fit pin's
+    section swept over z = +-half_width; empty for others."""
     shape = rigid["shape"]
-    if shape in ("cylinder", "cylinder_y"):
+    if shape == "cylinder":
+        return _revolved(_peg_profile(rigid), points)
+    if shape == "cylinder_y":  # local axis y: (x, y, z) <- (x, z_cylinder, y_cylinder)
         radius = rigid["radius"]
-        half = rigid["length"] / 2 if shape == "cylinder" else 2 * radius
-        angle = np.linspace(0, 2 * np.pi, points, endpoint=False)
-        ring = radius * np.c_[np.cos(angle), np.sin(angle)]
-        vertices = np.vstack([np.c_[ring, np.full(points, -half)], np.c_[ring, np.full(points, half)],
-                              [[0, 0, -half], [0, 0, half]]])
-        if shape == "cylinder_y":  # local axis y: (x, y, z) <- (x, z_cylinder, y_cylinder)
-            vertices = vertices[:, [0, 2, 1]]
-        k, k1 = np.arange(points), (np.arange(points) + 1) % points
-        triangles = np.vstack([np.c_[k, k1, points + k], np.c_[k1, points + k1, points + k],
-                               np.c_[np.full(points, 2 * points), k1, k],
-                               np.c_[np.full(points, 2 * points + 1), points + k, points + k1]])
-        return vertices, triangles
+        vertices, triangles = _revolved(np.array([[0.0, -2 * radius], [radius, -2 * radius], [radius, 2 * radius],
+                                                  [0.0, 2 * radius]]), points)
+        return vertices[:, [0, 2, 1]], triangles
     if shape == "pin":
         from geometry.snap_fit import outline as pin_outline
 

@@ -12,7 +12,7 @@ import ufl
 from ufl.algorithms.apply_derivatives import apply_derivatives
 
 from femcontact.effects.rigid_corners import corner_points
-from femcontact.physics.signed_distance import signed_distance
+from femcontact.physics.signed_distance import outline, signed_distance, surface
 
 R, L = 20.0, 10.0
 
@@ -20,7 +20,7 @@ R, L = 20.0, 10.0
 def shape(dim: int, r: float, tip_contact: bool = True) -> dict:
     size = {"half_width": R} if dim == 2 else {"radius": R}
     return {"shape": "rectangle" if dim == 2 else "cylinder", **size, "length": L, "corner_radius": r,
-            "scale": R, "tip_contact": tip_contact}
+            "chamfer_width": 0.0, "chamfer_angle": 45.0, "scale": R, "tip_contact": tip_contact}
 
 
 def evaluate(rigid: dict, points) -> tuple[np.ndarray, np.ndarray]:
@@ -176,6 +176,17 @@ def test_chamfered_normal_is_the_distance_gradient(dim):
 def test_2d_corner_points_lie_on_the_outline(rigid):
     """The sharp corners the 2-D peg tracks as slave points (effects.rigid_corners) lie on its
     outline: four for the rectangle, six with a tip chamfer (its two ends on either side)."""
-    corners = corner_points({**rigid, "chamfer_width": rigid.get("chamfer_width", 0.0)})
-    assert len(corners) == (6 if "chamfer_angle" in rigid else 4)
+    corners = corner_points(rigid)
+    assert len(corners) == (6 if rigid["chamfer_width"] > 0 else 4)
     assert evaluate(rigid, corners)[0] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("rigid", [shape(3, 1.0), chamfered(3)], ids=["rounded", "chamfered"])
+def test_pictures_lie_on_the_contact_shape(rigid):
+    """The peg drawn in rigid.xdmf and the snapshots (its 2-D outline, its 3-D surface of
+    revolution, 12 angles) is the shape the contact sees: every vertex at distance 0 (1e-12 mm)."""
+    flat = {**rigid, "shape": "rectangle", "half_width": R}
+    outline_points = outline(flat)[:, :2]
+    vertices = surface(rigid, points=12)[0]
+    assert evaluate(flat, outline_points)[0] == pytest.approx(0.0, abs=1e-12)
+    assert evaluate(rigid, vertices)[0] == pytest.approx(0.0, abs=1e-12)
