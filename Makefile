@@ -141,7 +141,7 @@ plasticity_insertion: setup
 	$(PY) -m benchmarks.plasticity_insertion
 
 # 3-D wedging: peak von Mises under a sharp and a 1 mm rounded tip rim against the contact element
-# size (1 to 0.125 mm), on $(RANKS) ranks; results/rim_3d/rim_3d.md
+# size (1 to 0.125 mm), elastic and with plasticity, on $(RANKS) ranks; results/rim_3d/rim_3d.md
 rim_3d: setup
 	mpirun -n $(RANKS) $(PY) -m benchmarks.rim_3d
 

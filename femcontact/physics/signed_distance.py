@@ -3,7 +3,9 @@
 Every shape is written in its own frame, centred on its reference point (the centroid
 for a peg, the centre for a disc), so the rigid body's pose only maps points into that
 frame. Shapes come from `geometry.model.Model.rigid`:
-rectangle (2-D peg, flat punch), cylinder (3-D peg), disc (2-D cylinder indenter),
+rectangle (2-D peg, flat punch) and cylinder (3-D peg, flat punch), a peg's corners or rims
+rounded by `corner_radius` (quarter circles, quarter tori) or its tip cut by a chamfer
+(`chamfer_width`, `chamfer_angle`), disc (2-D cylinder indenter),
 cylinder_y (3-D cylinder indenter, axis y), sphere (3-D sphere indenter), hole (a rigid hole, the peg deformable) and
 pin (snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred; in 3-D a blade,
 its section swept along z).
