@@ -62,15 +62,20 @@ def wedging_rows() -> list[dict]:
     return rows
 
 
-def peak_by_block(simulation) -> dict:
-    """Peak cellwise von Mises stress (MPa) in block A (x < 0) and block B (x > 0)."""
+def peak_by_block(simulation, name: str = "von_mises", value=None) -> dict:
+    """Peak of a cellwise value (default the von Mises stress, MPa) in block A (x < 0) and block B
+    (x > 0), as `{name}_A`, `{name}_B` (`peak_A`, `peak_B` for von Mises); in 3-D the block's
+    halves beside contact A (the mouth edge) and contact B (the peg's tip rim). Global over the
+    mesh's ranks."""
     p = simulation.problem
     W0 = fem.FunctionSpace(p.mesh, ("DG", 0))
-    von_mises = fem.Function(W0)
-    von_mises.interpolate(fem.Expression(p.von_mises, W0.element.interpolation_points()))
+    values = fem.Function(W0)
+    values.interpolate(fem.Expression(p.von_mises if value is None else value, W0.element.interpolation_points()))
     x = cell_coordinates(p.mesh).mean(axis=1)[:, 0]
-    values = von_mises.x.array[: len(x)]
-    return {"peak_A": float(values[x < 0].max()), "peak_B": float(values[x > 0].max())}
+    local = values.x.array[: len(x)]
+    prefix = "peak" if name == "von_mises" else name
+    return {f"{prefix}_{side}": p.mesh.comm.allreduce(float(local[half].max(initial=0.0)), op=MPI.MAX)
+            for side, half in (("A", x < 0), ("B", x > 0))}
 
 
 def edge_radius_rows(radius: float = 1.0) -> list[dict]:

@@ -191,6 +191,9 @@ def check_peg_in_hole(scene: dict) -> None:
         if r >= d / 2 or 2 * r >= length:
             raise InputError(f"peg.corner_radius = {r}: must be < peg.width/2 = {d / 2} "
                              f"and < peg.length/2 = {length / 2}")
+    if scene["rigid"] == "hole" and hole["chamfer_width"] > 0:
+        raise InputError(f"hole.chamfer_width = {hole['chamfer_width']}: a rigid hole has no chamfer "
+                         "(set it to 0, or mesh the hole: rigid = 'peg')")
     if peg["chamfer_width"] >= d / 2:
         raise InputError(f"peg.chamfer_width = {peg['chamfer_width']}: must be < peg.width/2 = {d / 2}")
     h_p = chamfer_height(peg["chamfer_width"], peg["chamfer_angle"])

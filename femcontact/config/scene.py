@@ -58,9 +58,11 @@ PEG = {
                     "placement 'centred' (Whitney's lateral error)"),
     "gap": Field("float", 0.0, "horizontal gap (mm) left at both contact points for placement 'two_point'",
                  min=0.0),
-    "chamfer_width": Field("float", 0.0, "peg-tip chamfer width (mm)", min=0.0),
+    "chamfer_width": Field("float", 0.0, "peg-tip chamfer width across the axis (mm): a flat cut in 2-D, a cone "
+                           "in 3-D, on a meshed or a rigid peg", min=0.0),
     "chamfer_angle": Field("float", 45.0, "peg-tip chamfer angle from the axis (deg)", min=1.0, max=89.0),
-    "corner_radius": Field("float", 0.0, "rounding of the rigid peg's corners (mm)", min=0.0),
+    "corner_radius": Field("float", 0.0, "edge radius of the rigid peg: its four corners in 2-D, its two rims (a "
+                           "quarter torus each) in 3-D (mm); not with a chamfer, not on a meshed peg", min=0.0),
     "tip_contact": Field("bool", True, "false: the rigid peg's end faces take no contact from inside, a node "
                          "inside the peg is pushed out through its side (an entering peg: a wall node passed by "
                          "the tip corner cannot snag under the tip face); keep true if the peg can land on its tip"),
@@ -74,7 +76,8 @@ HOLE = {
     "depth": Field("float", 20.0, "hole depth (mm)", positive=True),
     "block_width": Field("float", 20.0, "width of each block beside the hole (mm)", positive=True),
     "bottom_thickness": Field("float", 10.0, "material below the hole bottom, 'single' only (mm)", positive=True),
-    "chamfer_width": Field("float", 0.0, "hole-mouth chamfer width (mm)", min=0.0),
+    "chamfer_width": Field("float", 0.0, "hole-mouth chamfer width (mm); a meshed hole only (rigid = 'peg')",
+                           min=0.0),
     "chamfer_angle": Field("float", 45.0, "hole-mouth chamfer angle from the axis (deg)", min=1.0, max=89.0),
     "support": Field("str", "outer", "fixed edge/face: 'outer' sides or 'bottom'", choices=("outer", "bottom")),
 }

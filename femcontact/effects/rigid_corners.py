@@ -37,11 +37,17 @@ in Newton's first iteration, so the body cannot turn into the surface unopposed.
 
 
 def corner_points(rigid: dict) -> np.ndarray:
-    """Sharp corners of a 2-D rectangle in its shape frame about the reference point."""
+    """Sharp corners of a 2-D rectangle in its shape frame about the reference point; with a
+    tip chamfer, the chamfer's two ends on either side instead of the tip corners."""
     if rigid["shape"] != "rectangle" or rigid["corner_radius"] > 0:
         return np.zeros((0, 2))
-    w, h = rigid["half_width"], rigid["length"] / 2
-    return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+    w, h, cw = rigid["half_width"], rigid["length"] / 2, rigid["chamfer_width"]
+    if cw > 0:
+        top_of_chamfer = cw / np.tan(np.radians(rigid["chamfer_angle"])) - h
+        tip = [[-w, top_of_chamfer], [-w + cw, -h], [w - cw, -h], [w, top_of_chamfer]]
+    else:
+        tip = [[-w, -h], [w, -h]]
+    return np.array([*tip, [w, h], [-w, h]])
 
 
 class RigidCorners(Effect):

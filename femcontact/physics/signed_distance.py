@@ -3,7 +3,9 @@
 Every shape is written in its own frame, centred on its reference point (the centroid
 for a peg, the centre for a disc), so the rigid body's pose only maps points into that
 frame. Shapes come from `geometry.model.Model.rigid`:
-rectangle (2-D peg, flat punch), cylinder (3-D peg), disc (2-D cylinder indenter),
+rectangle (2-D peg, flat punch) and cylinder (3-D peg, flat punch), a peg's corners or rims
+rounded by `corner_radius` (quarter circles, quarter tori) or its tip cut by a chamfer
+(`chamfer_width`, `chamfer_angle`), disc (2-D cylinder indenter),
 cylinder_y (3-D cylinder indenter, axis y), sphere (3-D sphere indenter), hole (a rigid hole, the peg deformable) and
 pin (snap-fit pin: a shank with a nose of segments and circular arcs, tip-centred; in 3-D a blade,
 its section swept along z).
@@ -24,13 +26,46 @@ def _box(q, radius, tiny, sides_only=False):
     q_i > 0), the distance to it, sqrt(q_0^2 + q_1^2), with `tiny` (mm) under the root only so
     its derivative stays finite in the branches not taken. `sides_only`: a point inside is
     pushed out through the side (q[0]) whatever the nearer face, so the end faces take no
-    contact from inside (a peg's tip face, see `tip_contact`)."""
+    contact from inside (a peg's tip face, see `tip_contact`), also within `radius` of them."""
     q0, q1 = q
     edge = ufl.sqrt(ufl.max_value(q0, 0) ** 2 + ufl.max_value(q1, 0) ** 2 + tiny ** 2)
     outside = ufl.conditional(ufl.And(ufl.gt(q0, 0), ufl.gt(q1, 0)), edge, ufl.max_value(q0, q1))
     inside = q0 if sides_only else ufl.max_value(q0, q1)
-    is_outside = ufl.Or(ufl.gt(q0, 0), ufl.gt(q1, 0))
+    is_outside = ufl.Or(ufl.gt(q0, 0), ufl.gt(q1, radius if sides_only else 0))
     return ufl.conditional(is_outside, outside, inside) - radius
+
+
+def _to_segment(p, a, b, tiny):
+    """Distance (mm) from the point p to the segment a-b, in a plane (regularised by `tiny`)."""
+    ex, ez = b[0] - a[0], b[1] - a[1]
+    t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ex + (p[1] - a[1]) * ez) / (ex * ex + ez * ez), 1.0), 0.0)
+    return ufl.sqrt((p[0] - a[0] - t * ex) ** 2 + (p[1] - a[1] - t * ez) ** 2 + tiny ** 2) - tiny
+
+
+def _chamfered(rigid, half, across, along, tiny, sides_only):
+    """Signed distance to a peg (half width or radius `half`, centred, axis along) whose tip
+    edge is cut by a chamfer of `chamfer_width` at `chamfer_angle` (deg) from the axis: the convex
+    outline tip face, chamfer, side, top face in (across, along). Inside, the largest distance
+    to the four faces' lines (each face's normal as gradient, also on the face); outside, the
+    distance to the nearest face. `sides_only`: inside, only the side and the chamfer count."""
+    width = rigid["chamfer_width"]
+    height = width / np.tan(np.radians(rigid["chamfer_angle"]))
+    h = rigid["length"] / 2
+    corners = [(0.0, -h), (half - width, -h), (half, height - h), (half, h), (0.0, h)]
+    slant = np.hypot(width, height)
+    lines = {"tip": -along - h, "chamfer": ((across - half + width) * height - (along + h) * width) / slant,
+             "side": across - half, "top": along - h}
+    outside_distances = [_to_segment((across, along), a, b, tiny) for a, b in zip(corners[:-1], corners[1:])]
+    is_outside = ufl.gt(lines["tip"], 0)
+    for name in ("chamfer", "side", "top"):
+        is_outside = ufl.Or(is_outside, ufl.gt(lines[name], 0))
+    faces = ("chamfer", "side") if sides_only else ("tip", "chamfer", "side", "top")
+    inside, outside = lines[faces[0]], outside_distances[0]
+    for name in faces[1:]:
+        inside = ufl.max_value(inside, lines[name])
+    for distance in outside_distances[1:]:
+        outside = ufl.min_value(outside, distance)
+    return ufl.conditional(is_outside, outside, inside)
 
 
 def reference_point(rigid: dict) -> np.ndarray:
@@ -48,15 +83,13 @@ def signed_distance(rigid: dict, xi):
     `rigid["scale"]` is a float size (mm) used for regularisation."""
     shape = rigid["shape"]
     tiny = 1e-15 * 10.0 ** round(np.log10(max(rigid["scale"], 1.0)))  # a decade, so it rarely changes the form
-    if shape == "rectangle":
-        r = rigid["corner_radius"]
-        q = [abs(xi[0]) - (rigid["half_width"] - r), abs(xi[1]) - (rigid["length"] / 2 - r)]
-        return _box(q, r, tiny, not rigid.get("tip_contact", True))
-    if shape == "cylinder":
-        r = rigid["corner_radius"]
-        rho = ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
-        return _box([rho - (rigid["radius"] - r), abs(xi[2]) - (rigid["length"] / 2 - r)], r, tiny,
-                    not rigid.get("tip_contact", True))
+    if shape in ("rectangle", "cylinder"):  # a peg: across its axis |x| (2-D) or rho (3-D), along it z
+        half, r = rigid["half_width" if shape == "rectangle" else "radius"], rigid["corner_radius"]
+        across = abs(xi[0]) if shape == "rectangle" else ufl.sqrt(xi[0] ** 2 + xi[1] ** 2 + tiny ** 2)
+        along, sides_only = xi[len(xi) - 1], not rigid.get("tip_contact", True)
+        if rigid.get("chamfer_width", 0.0) > 0:
+            return _chamfered(rigid, half, across, along, tiny, sides_only)
+        return _box([across - (half - r), abs(along) - (rigid["length"] / 2 - r)], r, tiny, sides_only)
     if shape in ("disc", "sphere"):
         return ufl.sqrt(ufl.dot(xi, xi)) - rigid["radius"]
     if shape == "cylinder_y":
@@ -100,8 +133,7 @@ def _pin_2d(pieces, pin_length, xi, tiny):
         a, b = np.asarray(piece[-2], float), np.asarray(piece[-1], float)
         if piece[0] == "segment":
             ab = b - a
-            t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / (ab @ ab), 1.0), 0.0)
-            distances.append(length([p[0] - a[0] - t * ab[0], p[1] - a[1] - t * ab[1]]))
+            distances.append(_to_segment(p, a, b, tiny))
             r_of_z = a[0] + (xi[1] - a[1]) * ab[0] / ab[1] if ab[1] > 0 else None
         else:
             centre, R = np.asarray(piece[1], float), piece[2]
@@ -122,12 +154,38 @@ def _pin_2d(pieces, pin_length, xi, tiny):
     return ufl.conditional(inside, -distance, distance)
 
 
+def _peg_profile(rigid: dict) -> np.ndarray:
+    """Half outline (across, along) of a peg about its centre, from the tip centre to the top
+    centre, with its rounded corners (sampled) or its tip chamfer."""
+    from geometry.placement import peg_profile
+
+    half = rigid["half_width"] if rigid["shape"] == "rectangle" else rigid["radius"]
+    peg = {"width": 2 * half, **{key: rigid[key] for key in ("length", "corner_radius", "chamfer_width", "chamfer_angle")}}
+    return peg_profile(peg) - [0.0, rigid["length"] / 2]
+
+
+def _revolved(profile: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, triangles) of the surface swept by a half outline (across, along) from pole to
+    pole round the axis along z, in `points` angles."""
+    angle = np.linspace(0, 2 * np.pi, points, endpoint=False)
+    rings = profile[1:-1]
+    vertices = np.vstack([np.c_[rho * np.cos(angle), rho * np.sin(angle), np.full(points, z)] for rho, z in rings]
+                         + [[[0.0, 0.0, profile[0, 1]], [0.0, 0.0, profile[-1, 1]]]])
+    k, k1 = np.arange(points), (np.arange(points) + 1) % points
+    bands = [np.vstack([np.c_[a + k, a + k1, a + points + k], np.c_[a + k1, a + points + k1, a + points + k]])
+             for a in range(0, (len(rings) - 1) * points, points)]
+    tip, top, last = len(rings) * points, len(rings) * points + 1, (len(rings) - 1) * points
+    caps = [np.c_[np.full(points, tip), k1, k], np.c_[np.full(points, top), last + k, last + k1]]
+    return vertices, np.vstack(bands + caps)
+
+
 def outline(rigid: dict, points: int = 64) -> np.ndarray:
     """Closed polyline (P x 3, local frame about the reference point) of a 2-D shape, for pictures."""
     shape = rigid["shape"]
     if shape == "rectangle":
-        w, h = rigid["half_width"], rigid["length"] / 2
-        xy = np.array([[-w, -h], [w, -h], [w, h], [-w, h], [-w, -h]])
+        right = _peg_profile(rigid)[1:-1]
+        left = right[::-1] * [-1.0, 1.0]
+        xy = np.vstack([right, left, right[:1]])
     elif shape == "disc":
         t = np.linspace(0, 2 * np.pi, points)
         xy = rigid["radius"] * np.c_[np.cos(t), np.sin(t)]
@@ -142,23 +200,17 @@ def outline(rigid: dict, points: int = 64) -> np.ndarray:
 
 def surface(rigid: dict, points: int = 48) -> tuple[np.ndarray, np.ndarray]:
     """Triangulated surface (vertices P x 3 in the local frame about the reference point, triangles
-    T x 3) of a 3-D shape, for pictures: a cylinder with its end caps, the indenter's cylinder
-    (axis y, 4 radii long), the snap-fit pin's section swept over z = +-half_width; empty for others."""
+    T x 3) of a 3-D shape, for pictures: a peg or flat punch with its end caps (rims rounded or
+    chamfered as the shape is), the indenter's cylinder (axis y, 4 radii long), the snap-fit pin's
+    section swept over z = +-half_width; empty for others."""
     shape = rigid["shape"]
-    if shape in ("cylinder", "cylinder_y"):
+    if shape == "cylinder":
+        return _revolved(_peg_profile(rigid), points)
+    if shape == "cylinder_y":  # local axis y: (x, y, z) <- (x, z_cylinder, y_cylinder)
         radius = rigid["radius"]
-        half = rigid["length"] / 2 if shape == "cylinder" else 2 * radius
-        angle = np.linspace(0, 2 * np.pi, points, endpoint=False)
-        ring = radius * np.c_[np.cos(angle), np.sin(angle)]
-        vertices = np.vstack([np.c_[ring, np.full(points, -half)], np.c_[ring, np.full(points, half)],
-                              [[0, 0, -half], [0, 0, half]]])
-        if shape == "cylinder_y":  # local axis y: (x, y, z) <- (x, z_cylinder, y_cylinder)
-            vertices = vertices[:, [0, 2, 1]]
-        k, k1 = np.arange(points), (np.arange(points) + 1) % points
-        triangles = np.vstack([np.c_[k, k1, points + k], np.c_[k1, points + k1, points + k],
-                               np.c_[np.full(points, 2 * points), k1, k],
-                               np.c_[np.full(points, 2 * points + 1), points + k, points + k1]])
-        return vertices, triangles
+        vertices, triangles = _revolved(np.array([[0.0, -2 * radius], [radius, -2 * radius], [radius, 2 * radius],
+                                                  [0.0, 2 * radius]]), points)
+        return vertices[:, [0, 2, 1]], triangles
     if shape == "pin":
         from geometry.snap_fit import outline as pin_outline
 

@@ -92,6 +92,8 @@ def test_centred_placement():
     ({"hole": {"depth": 3.0}}, "hole.depth"),
     ({"hole": {"block_width": -1.0}}, "hole.block_width"),
     ({"peg": {"corner_radius": 0.5}, "rigid": "hole"}, "peg.corner_radius"),
+    ({"peg": {"corner_radius": 0.5, "chamfer_width": 1.0}}, "peg.corner_radius"),
+    ({"hole": {"chamfer_width": 1.0}, "rigid": "hole"}, "hole.chamfer_width"),
 ])
 def test_impossible_inputs_are_refused(sections, parameter):
     with pytest.raises(InputError, match=parameter.replace(".", r"\.")):

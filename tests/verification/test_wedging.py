@@ -153,3 +153,18 @@ def test_thesis_setup_keeps_the_case_order(thesis_cases):
     shallow, deep = thesis_cases[5.0][0], thesis_cases[6.0][0]
     assert shallow["tilt_change_deg"] > deep["tilt_change_deg"]
     assert shallow["residual_force_A"] > deep["residual_force_A"]
+
+
+def test_a_rigid_peg_with_a_tip_chamfer_wedges_on_the_chamfer_edge(tmp_path):
+    """A 0.5 mm x 45 deg chamfer on the rigid peg's tip (l_d = 5): placed with the chamfer's top
+    edge on wall B, the peg wedges like the sharp one (balanced, both reactions on the line of the
+    contacts), and contact B stays at that edge (within 0.02 mm; its corner is a tracked point)."""
+    from femcontact.families.case import run_contact
+    from geometry.placement import peg_pose
+
+    scene = load_scene(SCENE, ["peg.chamfer_width=0.5", f"mesh.resolution={RESOLUTION}"])
+    m = run_contact(scene, tmp_path)["metrics"]
+    assert m["wedged"], m["wedge_reason"]
+    assert m["residual_force_A"] > 1.0 and m["imbalance"] < 1e-3
+    assert m["angle_A_deg"] < wedging.ANGLE_TOL_DEG and m["angle_B_deg"] < wedging.ANGLE_TOL_DEG
+    assert m["release.contact_B_y"] == pytest.approx(peg_pose(scene).points["contact_B"][1], abs=0.02)
