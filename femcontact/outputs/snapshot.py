@@ -54,6 +54,8 @@ def zoom_box(fields: dict, zoom, radius: float = 0.0):
         size = np.ptp(fields["points"], axis=0).max()
         return np.asarray(centre, float), radius or size / 8
     *centre, r = zoom
+    if not r > 0:
+        raise ValueError(f"zoom {list(zoom)}: the radius (its last value, mm) must be > 0")
     return np.array(list(centre) + [0.0] * (3 - len(centre))), float(r)
 
 

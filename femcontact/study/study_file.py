@@ -66,8 +66,9 @@ SCHEMA = {
         "field": Field("str", "von_mises", "field shown", choices=("von_mises",)),
         "zoom": Field("any", "", "named point of the fields file, or [x, y(, z), radius]",
                       check=lambda v: None if isinstance(v, str) or (
-                          isinstance(v, list) and len(v) in (3, 4) and all(isinstance(x, (int, float)) for x in v))
-                      else "expected a name or [x, y(, z), radius]"),
+                          isinstance(v, list) and len(v) in (3, 4) and all(isinstance(x, (int, float)) for x in v)
+                          and v[-1] > 0)
+                      else "expected a name or [x, y(, z), radius] with radius > 0"),
         "zoom_radius": Field("float", 0.0, "zoom radius around a named point; 0 = 1/8 of the model size", min=0.0),
         "scale": Field("float", 1.0, "displacement magnification", min=0.0),
     },

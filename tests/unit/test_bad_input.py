@@ -291,6 +291,8 @@ def test_study_refuses_bad_files_and_options(tmp_path, capsys):
     assert_refused(*cli(capsys, "report", tmp_path, "--results", results), "a directory, expected a TOML file")
     path.write_text(path.read_text().replace("base.toml", "gone.toml"))
     assert_refused(*cli(capsys, "study", path, "--results", results), "gone.toml: no such file")
+    path = study_file(tmp_path, '[sweep]\ngrid = { "contact.mu" = [0.1] }\n[snapshots]\nzoom = [20.0, -5.4, -1.0]')
+    assert_refused(*cli(capsys, "study", path, "--results", results), "snapshots.zoom", "radius > 0")
     path = study_file(tmp_path, "", settings="time_limit = inf")
     assert_refused(*cli(capsys, "study", path, "--results", results), "study.time_limit = inf")
     for launcher, fragment in (("mpirn -n {ranks}", "'mpirn': no such program"),

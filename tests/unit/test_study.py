@@ -393,6 +393,8 @@ def test_snapshot_colour_range_clips_a_singular_peak(tmp_path, dim, cellwise):
     assert info["peak"]["distance"] == pytest.approx(0.0 if not cellwise else 0.3, abs=0.3)
     assert (tmp_path / "s.png").read_bytes()[:8] == PNG
     render(tmp_path / "fields.npz", tmp_path / "body.png")
+    with pytest.raises(ValueError, match="radius"):  # [x, y, r] read as x, r: a slip a user makes
+        render(tmp_path / "fields.npz", tmp_path / "bad.png", zoom=(20.0, -5.4))
     shown = _dark_blue_share(tmp_path / "body.png")
     render(tmp_path / "fields.npz", tmp_path / "full.png", percentile=100.0)
     unclipped = _dark_blue_share(tmp_path / "full.png")
