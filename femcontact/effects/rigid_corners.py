@@ -66,6 +66,8 @@ class RigidCorners(Effect):
         self.friction = "friction" in p.effects
         self.segments = self._segments()
         self.coordinates = p.V.tabulate_dof_coordinates()[:, :2]
+        start = sum(p.mesh.comm.allgather(len(self.segments))[:p.mesh.comm.rank])
+        self.owned = slice(start, start + len(self.segments))  # this rank's rows of `_all_normals`
         self.neighbours = self._neighbours()
         self.active_count = 0
         self.search = 4 * p.model.h_contact
@@ -117,7 +119,7 @@ class RigidCorners(Effect):
         ends = imap.local_to_global(self.segments[:, :2].reshape(-1).astype(np.int32)).reshape(-1, 2)
         all_ends = np.concatenate(comm.allgather(ends)).reshape(-1, 2)
         normals = self._all_normals(np.zeros_like(self.problem.u.x.array))
-        offset = sum(comm.allgather(len(ends))[:comm.rank])
+        offset = self.owned.start
         out = np.full(ends.shape, -1, dtype=np.int64)
         for i, pair in enumerate(ends):
             for j, node in enumerate(pair):
@@ -176,7 +178,7 @@ class RigidCorners(Effect):
         a, b = self.segments[:, 0], self.segments[:, 1]
         xa, xb = self.coordinates[a] + u[a], self.coordinates[b] + u[b]
         edge = xb - xa
-        ends = _end_normals(self._normals(u), self._neighbour_normals(slice(None), all_normals))
+        ends = _end_normals(all_normals[self.owned], self._neighbour_normals(slice(None), all_normals))
         arm = corners[:, None, :] - xa[None, :, :]  # corners x segments x 2
         t = _projection(arm, edge, ends[:, 0], ends[:, 1])
         normal = ends[None, :, 0] + t[:, :, None] * (ends[None, :, 1] - ends[None, :, 0])
@@ -308,7 +310,6 @@ class RigidCorners(Effect):
 
     def outputs(self) -> dict:
         return {"corner_contacts": self.active_count}
-
 
 
 def _outward(edge: np.ndarray, away: np.ndarray) -> np.ndarray:
