@@ -68,6 +68,27 @@ def test_uniaxial_stress_bar_follows_the_exact_curve_through_unloading_and_rever
         assert np.allclose(sigma[:, [1, 2, 4, 5, 8]], 0.0, atol=1e-6)  # uniaxial
 
 
+def test_plane_stress_uniaxial_strip_follows_the_exact_curve():
+    """A plane-stress strip (P1, its out-of-plane strain solved at each quadrature point) pulled
+    along x, free across: uniaxial stress, the same exact curve as the 3-D bar, with sigma_yy and
+    sigma_zz zero to round-off, through loading, unloading, reversal and reloading."""
+    square = mesh.create_unit_square(MPI.COMM_WORLD, 2, 2)
+    pull = fem.Constant(square, 0.0)
+
+    def bcs(V):
+        return [fixed(V, lambda x, k=k: np.isclose(x[k], 0.0), k, fem.Constant(square, 0.0)) for k in range(2)] + \
+            [fixed(V, lambda x: np.isclose(x[0], 1.0), 0, pull)]
+
+    body = PlasticBody(square, 1, E, NU, HARDENING, bcs, plane_stress=True)
+    for strain, stress in zip(PATH, uniaxial_reference(PATH, E, HARDENING)):
+        pull.value = strain
+        norms = body.increment()
+        assert_quadratic(norms, strain)
+        sigma = body.values(body.stress).reshape(-1, 9)
+        assert np.allclose(sigma[:, 0], stress, rtol=1e-9, atol=1e-6), (strain, sigma[:, 0], stress)
+        assert np.allclose(sigma[:, [1, 2, 4, 5, 8]], 0.0, atol=1e-6)  # uniaxial: sigma_zz = 0 too
+
+
 def test_plane_strain_simple_shear_follows_the_exact_curve():
     square = mesh.create_unit_square(MPI.COMM_WORLD, 2, 2)
     boundary_values = []
