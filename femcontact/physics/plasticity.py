@@ -18,8 +18,8 @@ TINY = 1e-20
 the deviatoric stress vanishes (an unstrained body); a relative change below 1e-20 at yield."""
 PLANE_STRESS_STEPS = 6
 """Newton steps on the out-of-plane strain of plane stress: from the elastic guess (exact below
-yield) sigma_zz falls quadratically, 1e2 -> 1 -> 1e-4 -> 1e-12 MPa at 3.6 times the yield strain
-in uniaxial tension, so six leave round-off also for the larger steps at a contact corner."""
+yield) sigma_zz falls quadratically and reaches round-off in three at 3.6 times the yield strain
+in uniaxial tension; six leave a margin for the larger strain steps at a contact corner."""
 ON_SURFACE = 1e-10
 """A point within this fraction above the yield stress is on the surface, not flowing: a state just
 returned to the surface (round-off either side) then starts the next increment with the elastic
