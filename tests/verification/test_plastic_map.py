@@ -30,7 +30,7 @@ def gathered(tmp_path_factory):
             femcontact.run(case.scene, out=case.dir, quiet=True)
         cases[name] = ok_cases(study_file, folder)
     plastic_map.write(cases, folder)
-    return plastic_map.pair(cases)[0], folder
+    return plastic_map.pair(cases)[0], folder, cases
 
 
 def test_below_yield_the_plastic_run_is_the_elastic_one(gathered):
@@ -56,9 +56,17 @@ def test_above_yield_the_corners_flow_and_the_stress_stays_on_the_hardening_curv
 
 
 def test_the_gathering_writes_its_page_table_and_plot(gathered):
-    rows, results = gathered
+    rows, results, _ = gathered
     page = (results / "plasticity_wedging.md").read_text()
     assert "| 5 | 40.1 | 0.2 | F (-25, 5) N | 1.77 | 0.62 | yes / yes |" in page
     assert "passes the yield stress at 1, the plastic run yields (PEEQ > 0) at 1 (the same points)" in page
     assert len((results / "plasticity_wedging.csv").read_text().splitlines()) == 1 + len(rows) == 3
     assert (results / "plasticity_wedging.png").stat().st_size > 10_000
+
+
+def test_a_point_run_only_one_way_is_listed_not_paired(gathered):
+    """A point whose plastic run is missing (failed, or not run yet) is named under the table."""
+    cases = gathered[2]
+    rows, alone = plastic_map.pair({**cases, plastic_map.PLASTIC: cases[plastic_map.PLASTIC][1:]})
+    assert len(rows) == 1 and [scene["steps"][0]["force"] for scene in alone] == [[-1.0, 0.2]]
+    assert "1 map point(s) with only one of the two results" in plastic_map.page(rows, alone)
