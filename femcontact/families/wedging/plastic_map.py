@@ -27,9 +27,10 @@ LABELLED_CHANGE = 0.005
 """A residual force change (fraction) the plot names its point at."""
 PEEQ_FLOOR = 1e-6
 """The smallest PEEQ the plot's colour scale shows; below it (and at 0) a point is drawn hollow."""
-COLUMNS = ["l_d_mm", "D_mm", "d_mm", "mu", "load", "mesh_resolution", "depth_over_l_crit", "depth_over_l_max", "wedged_elastic",
-           "wedged_plastic", "peak_von_mises_elastic_MPa", "elastic_over_yield", "yielded_plastic", "max_peeq",
-           "plastic_zone", "peak_von_mises_plastic_MPa", "R_A_elastic_N", "R_A_plastic_N", "R_A_change"]
+COLUMNS = ["l_d_mm", "D_mm", "d_mm", "mu", "load", "mesh_resolution", "depth_over_l_crit", "depth_over_l_max",
+           "wedged_elastic", "wedged_plastic", "peak_von_mises_elastic_MPa", "elastic_over_yield", "yielded_plastic",
+           "max_peeq", "plastic_zone", "peak_von_mises_plastic_MPa", "R_A_elastic_N", "R_A_plastic_N", "R_A_change"]
+"""The columns of plasticity_wedging.csv (R_A_change: a fraction, empty where the elastic run is not wedged)."""
 
 
 def map_point(scene: dict) -> str:
