@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_methods_2d dislodging_methods_3d dislodging_methods_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d accuracy stability plasticity plasticity_dislodging plasticity_insertion rim_3d clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d accuracy stability plasticity plasticity_dislodging plasticity_insertion plasticity_wedging rim_3d clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -139,6 +139,16 @@ plasticity_dislodging: setup
 # stiffness (K_x 20 to 600 N/mm); results/plasticity_insertion/
 plasticity_insertion: setup
 	$(PY) -m benchmarks.plasticity_insertion
+
+# The wedge map (studies/wedging.toml) elastic and on stainless 316 with plasticity
+# (studies/wedging_plastic.toml), paired by map point: wedged, yielded, PEEQ, plastic zone, residual
+# force change; results/plasticity_wedging/plasticity_wedging.md (each study's own report in results/STUDY/)
+plasticity_wedging: setup
+	@status=0; for study in wedging wedging_plastic; do \
+	  $(FEMCONTACT) study studies/$$study.toml $(STUDY_FLAGS) || status=$$?; \
+	  if [ $$status -gt 1 ]; then exit $$status; fi; \
+	  $(FEMCONTACT) report studies/$$study.toml || exit $$?; done; \
+	  $(PY) -m femcontact.study.gathering plasticity_wedging || exit $$?; exit $$status
 
 # 3-D wedging: peak von Mises under a sharp and a 1 mm rounded tip rim against the contact element
 # size (1 to 0.125 mm), elastic and with plasticity, on $(RANKS) ranks; results/rim_3d/rim_3d.md

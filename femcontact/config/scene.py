@@ -313,9 +313,8 @@ def check_contact(scene: dict) -> None:
         problems.append(f"effects = {effects}: 'plane_strain' and 'plane_stress' exclude each other")
     if dim == 3 and {"plane_strain", "plane_stress"} & set(effects):
         problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
-    if "plasticity" in effects and {"large_strain", "plane_stress"} & set(effects):
-        problems.append(f"effects = {effects}: 'plasticity' is small-strain, plane strain or 3-D "
-                        "(drop 'large_strain' and 'plane_stress')")
+    if "plasticity" in effects and "large_strain" in effects:
+        problems.append(f"effects = {effects}: 'plasticity' is small-strain (drop 'large_strain')")
     table, body = scene["plasticity"]["hardening"], deformable_body(scene)
     if "plasticity" in effects and table and table[0][1] != scene["materials"][body]["yield_stress"]:
         problems.append(f"plasticity.hardening = {table}: its first yield stress must be "

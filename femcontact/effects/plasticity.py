@@ -1,4 +1,5 @@
-"""J2 (von Mises) plasticity of the deformable body with isotropic hardening (small strain).
+"""J2 (von Mises) plasticity of the deformable body with isotropic hardening (small strain; 3-D,
+plane strain or, with `plane_stress`, plane stress: sigma_zz = 0 at every quadrature point).
 
 The initial yield stress is the body's `materials.<body>.yield_stress`; hardening is linear
 (`plasticity.hardening_modulus`, MPa) or piecewise linear through `plasticity.hardening`
@@ -28,19 +29,32 @@ class Plasticity(Effect):
 
     def build(self, problem) -> None:
         scene, dim, u = problem.scene, problem.dim, problem.u
-        lmbda, mu = law.lame(problem.constants["E"], problem.constants["nu"])
+        lmbda, mu = law.lame(problem.constants["E"], problem.constants["nu"])  # 3-D: plane stress solves eps_zz
         segments = j2.hardening_segments(hardening_points(scene, problem.deformable))
         self.quadrature = j2.QuadratureState(problem.mesh, scene["mesh"]["degree"])
         q = self.quadrature
-        strain = j2.to_3d(law.strain(u))
-        _, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu, segments)
-        problem.add_bulk(-2 * mu * ufl.inner(j2.in_plane(plastic_strain, dim), ufl.grad(problem.v)), q.dx)
+        plane_stress = "plane_stress" in problem.effects
+
+        def strain(plastic_strain, peeq):
+            if plane_stress:
+                return j2.plane_stress_strain(law.strain(u), plastic_strain, peeq, lmbda, mu, segments)
+            return j2.to_3d(law.strain(u))
+
+        points_strain = strain(q.plastic_strain, q.peeq)
+        stress, plastic_strain, peeq = j2.return_map(points_strain, q.plastic_strain, q.peeq, lmbda, mu, segments)
+        if plane_stress:  # the elastic plane-stress term (problem.stress) turned into the returned stress
+            change = j2.in_plane(stress, dim) - problem.stress
+        else:  # sigma = C : (eps - eps_p), and eps_p has no trace
+            change = -2 * mu * j2.in_plane(plastic_strain, dim)
+        problem.add_bulk(ufl.inner(change, ufl.grad(problem.v)), q.dx)
         self.updates = (q.expression(plastic_strain), q.expression(peeq))
         self.plastic_zone = fem.form(ufl.conditional(ufl.gt(peeq, 0), 1.0, 0.0) * q.dx)
-        stress, cell_plastic_strain, _ = j2.return_map(strain, q.plastic_strain_cell, q.peeq_cell, lmbda, mu, segments)
+        cell_strain = strain(q.plastic_strain_cell, q.peeq_cell)
+        stress, cell_plastic_strain, _ = j2.return_map(cell_strain, q.plastic_strain_cell, q.peeq_cell, lmbda, mu,
+                                                       segments)
         problem.stress = j2.in_plane(stress, dim)
         problem.von_mises = j2.von_mises(stress)
-        problem.energy_density = j2.elastic_energy(strain, cell_plastic_strain, lmbda, mu)
+        problem.energy_density = j2.elastic_energy(cell_strain, cell_plastic_strain, lmbda, mu)
 
     def _updated(self) -> tuple[np.ndarray, np.ndarray]:
         """The state the current displacement returns to, from the last converged one."""

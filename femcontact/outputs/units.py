@@ -67,6 +67,8 @@ LABELS = {
     "newton_iterations": "Newton iterations",
     "increments": "increments",
     "yielded": "yielded",
+    "max_peeq": "max PEEQ",  # the plasticity effect's columns
+    "plastic_zone": "plastic zone (mm^2 in 2-D, mm^3 in 3-D)",
     # dislodging metrics (femcontact.families.dislodging)
     "threshold_force_N": "threshold pull (N)",
     "bracket_N": "threshold bracket (N)",

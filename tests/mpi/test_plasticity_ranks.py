@@ -2,7 +2,7 @@
 
 The wedging scene pushed at four times its load, so the hole's corners flow (PEEQ about 0.02):
 reactions, contact forces, the peak PEEQ and the plastic zone's area agree to the solver's
-tolerance (1e-6 relative)."""
+tolerance (1e-6 relative), in plane strain and in plane stress."""
 import pytest
 from mpi4py import MPI
 
@@ -18,16 +18,17 @@ SCENE = {
 KEYS = ("reaction_support_A_x", "reaction_support_B_x", "contact_A_Fx", "contact_B_Fx", "max_peeq", "plastic_zone")
 
 
-def run(comm) -> dict:
-    simulation = Simulation(resolve_scene(SCENE), comm)
+def run(comm, plane: str) -> dict:
+    simulation = Simulation(resolve_scene({**SCENE, "effects": ["friction", plane, "plasticity"]}), comm)
     simulation.run()
     return simulation.step_end_rows()
 
 
 @pytest.mark.skipif(MPI.COMM_WORLD.size != 2, reason="run with mpirun -n 2")
-def test_two_ranks_match_one_rank_with_plastic_flow():
-    parallel = run(MPI.COMM_WORLD)
-    serial = run(MPI.COMM_SELF)
+@pytest.mark.parametrize("plane", ["plane_strain", "plane_stress"])
+def test_two_ranks_match_one_rank_with_plastic_flow(plane):
+    parallel = run(MPI.COMM_WORLD, plane)
+    serial = run(MPI.COMM_SELF, plane)
     assert serial["load"]["max_peeq"] > 1e-3 and serial["release"]["plastic_zone"] > 0
     for step in ("load", "release"):
         for key in KEYS:

@@ -12,10 +12,10 @@ from femcontact.physics import plasticity as j2
 
 
 class PlasticBody:
-    """Small-strain J2 body (plane strain in 2-D) of degree `degree` with Dirichlet `bcs`
-    built by `make_bcs(V)` and an optional extra residual term `extra(v)`."""
+    """Small-strain J2 body (plane strain in 2-D, or `plane_stress`) of degree `degree` with
+    Dirichlet `bcs` built by `make_bcs(V)` and an optional extra residual term `extra(v)`."""
 
-    def __init__(self, mesh, degree, E, nu, hardening, make_bcs, extra=None):
+    def __init__(self, mesh, degree, E, nu, hardening, make_bcs, extra=None, plane_stress=False):
         self.mesh, self.dim = mesh, mesh.geometry.dim
         self.V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
         self.u, v = fem.Function(self.V), ufl.TestFunction(self.V)
@@ -23,9 +23,10 @@ class PlasticBody:
         lmbda, mu = law.lame(E, nu)
         self.state = j2.QuadratureState(mesh, degree)
         q = self.state
-        strain = j2.to_3d(law.strain(self.u))
-        self.stress, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu,
-                                                          j2.hardening_segments(hardening))
+        segments = j2.hardening_segments(hardening)
+        strain = j2.plane_stress_strain(law.strain(self.u), q.plastic_strain, q.peeq, lmbda, mu, segments) \
+            if plane_stress else j2.to_3d(law.strain(self.u))
+        self.stress, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu, segments)
         self.residual = ufl.inner(j2.in_plane(self.stress, self.dim), ufl.grad(v)) * q.dx
         if extra is not None:
             self.residual += extra(v)

@@ -107,7 +107,6 @@ RUN_CASES = [
     (["steps.0.increments=10000000"], ["steps[0].increments = 10000000", "10000005 increments in all, at most 100000"]),
     (["steps.0.increments=60000", "steps.1.increments=60000"],
      ["steps[0].increments = 60000, steps[1].increments = 60000: 120000 increments in all"]),
-    (["effects=['plasticity', 'plane_stress']"], ["'plasticity' is small-strain, plane strain or 3-D"]),
     (["effects=['plasticity', 'large_strain']"], ["'plasticity' is small-strain"]),
     (["plasticity.hardening=[[0, 210], [1, 200]]"], ["plasticity.hardening = [[0, 210], [1, 200]]", "no softening"]),
     (["plasticity.hardening=[[0.1, 210]]"], ["plasticity.hardening", "start at 0"]),

@@ -68,6 +68,29 @@ def test_uniaxial_stress_bar_follows_the_exact_curve_through_unloading_and_rever
         assert np.allclose(sigma[:, [1, 2, 4, 5, 8]], 0.0, atol=1e-6)  # uniaxial
 
 
+@pytest.mark.parametrize("path", [PATH, np.array([0.0, 0.02, -0.02, 0.05])], ids=["path", "large_steps"])
+def test_plane_stress_uniaxial_strip_follows_the_exact_curve(path):
+    """A plane-stress strip (P1, its out-of-plane strain solved at each quadrature point) pulled
+    along x, free across: uniaxial stress, the same exact curve as the 3-D bar, with sigma_yy and
+    sigma_zz zero to round-off, through loading, unloading, reversal and reloading; also in steps
+    of 18 to 64 times the yield strain, which the six local steps still resolve."""
+    square = mesh.create_unit_square(MPI.COMM_WORLD, 2, 2)
+    pull = fem.Constant(square, 0.0)
+
+    def bcs(V):
+        return [fixed(V, lambda x, k=k: np.isclose(x[k], 0.0), k, fem.Constant(square, 0.0)) for k in range(2)] + \
+            [fixed(V, lambda x: np.isclose(x[0], 1.0), 0, pull)]
+
+    body = PlasticBody(square, 1, E, NU, HARDENING, bcs, plane_stress=True)
+    for strain, stress in zip(path, uniaxial_reference(path, E, HARDENING)):
+        pull.value = strain
+        norms = body.increment()
+        assert_quadratic(norms, strain)
+        sigma = body.values(body.stress).reshape(-1, 9)
+        assert np.allclose(sigma[:, 0], stress, rtol=1e-9, atol=1e-6), (strain, sigma[:, 0], stress)
+        assert np.allclose(sigma[:, [1, 2, 4, 5, 8]], 0.0, atol=1e-6)  # uniaxial: sigma_zz = 0 too
+
+
 def test_plane_strain_simple_shear_follows_the_exact_curve():
     square = mesh.create_unit_square(MPI.COMM_WORLD, 2, 2)
     boundary_values = []
@@ -203,11 +226,13 @@ def test_thick_cylinder_follows_hill_to_the_limit_pressure_with_errors_falling()
     assert rows[-1]["hill"] == pytest.approx(limit) and rows[-1]["pressure"] == pytest.approx(limit, rel=1e-4)
 
 
-def test_wedging_below_yield_is_the_elastic_answer():
+@pytest.mark.parametrize("plane", ["plane_strain", "plane_stress"])
+def test_wedging_below_yield_is_the_elastic_answer(plane):
     """Named but never reached, the yield surface changes nothing: the wedging scene (peak von
-    Mises 0.9 of yield at this mesh) gives the elastic scene's reactions and pose to the solver's
+    Mises 0.5 of yield at this mesh) gives the elastic scene's reactions and pose to the solver's
     tolerance (residual 1e-6 N on forces of 7 N: 1e-6 relative; the two solve the same equations
-    with different linear algebra), with PEEQ and the plastic zone exactly zero."""
+    with different linear algebra), with PEEQ and the plastic zone exactly zero; in plane stress
+    too, where the plastic run solves sigma_zz = 0 at each point and the elastic one condenses it."""
     from femcontact.families import resolve_scene
     from femcontact.solver.stepping import Simulation
 
@@ -215,7 +240,7 @@ def test_wedging_below_yield_is_the_elastic_answer():
             "insertion_depth": 5.0}, "hole": {"width": 40.1}, "contact": {"mu": 0.2}, "mesh": {"resolution": 0.5},
             "steps": [{"name": "load", "increments": 2, "force": [-5.0, 1.0]}, {"name": "release", "increments": 2}]}
     rows = {}
-    for effects in (["friction", "plane_strain"], ["friction", "plane_strain", "plasticity"]):
+    for effects in (["friction", plane], ["friction", plane, "plasticity"]):
         simulation = Simulation(resolve_scene({**base, "effects": effects}), MPI.COMM_SELF)
         simulation.run()
         rows["plasticity" in effects] = simulation.step_end_rows()["release"]
