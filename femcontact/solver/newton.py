@@ -392,7 +392,7 @@ class SchurNewton:
             return curved
         g0, g1 = self._slope(residual, du, dr), self._slope(trial, du, dr)
         if g0 < 0 < g1 and np.isfinite(g1):
-            a_lo, a_hi, (a, g), flat = 0.0, 1.0, (1.0, g1), False
+            a_lo, a_hi, (a, g), flat, level = 0.0, 1.0, (1.0, g1), False, False
             g_lo, g_hi = g0, g1
             for _ in range(ROOT_EVALUATIONS):
                 # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
@@ -407,6 +407,8 @@ class SchurNewton:
                     alpha = 0.5 * (a_lo + a_hi)
                 if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
                     alpha = a_lo + FLAT_SHRINK * (a_hi - a_lo)
+                if level:  # g stays level below the jump: bisect the bracket
+                    alpha = 0.5 * (a_lo + a_hi)
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
                 previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
@@ -416,6 +418,10 @@ class SchurNewton:
                 if abs(g) <= 0.5 * abs(g0):
                     return trial
                 if g < 0:
+                    # aimed at the root, g came less than a tenth of the way from g_lo to it: no
+                    # curvature below the jump to interpolate (a body turning freely until a contact
+                    # closes), so the quadratic's root would creep up from a_lo
+                    level = level or g - g_lo < 0.1 * -g_lo
                     a_lo, g_lo = alpha, g
                 else:
                     a_hi, g_hi = alpha, g

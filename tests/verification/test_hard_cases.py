@@ -52,6 +52,23 @@ def test_the_exact_equations_hold(pushed):
     assert abs(row["contact_A_Fy"]) < row["contact_A_Fx"] * -0.6719  # inside the friction cone
 
 
+def test_the_peg_turns_upright_at_the_sweep_mesh():
+    # the same push at the sweep's own mesh, in the scene's increments: on the way upright the peg
+    # turns freely until its flank meets the wall, so along a Newton step the slope R . d stays
+    # level and then jumps where that contact closes; the line search bisects towards the jump
+    # there. Interpolating the slope instead crept up by 1e-3 of the step per iteration, and the
+    # push failed at t = 0.027 s after 8 cuts.
+    case = [item for item in CASE if not item.startswith(("steps.0.increments", "mesh.resolution"))]
+    scene = load_scene(SCENE, case + ["mesh.resolution=1.154"])
+    simulation = Simulation(scene, MPI.COMM_WORLD)
+    simulation.run_step(0, scene["steps"][0])  # raises SimulationFailed where an increment does not converge
+    row = simulation.history[-1]
+    assert row["stabilization_force"] == 0.0
+    assert row["contact_B_force"] == 0.0  # the right wall lets go
+    assert row["contact_A_Fx"] == pytest.approx(PUSH[0], abs=1e-5)
+    assert row["contact_A_Fy"] == pytest.approx(PUSH[1], abs=1e-5)
+
+
 # A push (144.8 N down and to the left, mu 0.246) that presses the peg's sharp lower corner into
 # the right wall hard enough to dent it; on the release the corner slides back across a wall node
 # sitting in the dimple its own force made. With one normal per wall facet the corner lies under
