@@ -44,10 +44,12 @@ CONTACT_FIELDS = ("contact_pressure", "tangential_traction", "contact_status", "
 class Fields:
     """The fields of a simulation's state (see the module's docstring), built on every rank.
     With `follow` it watches the converged increments (a recorder observer and a listener of the
-    simulation, in that order, until `detach`): their contact values are read before the increment
-    is committed (committing moves the friction anchors, which would blur the stick/slip states)
-    and slip is measured from the state the step began in (from the state it was built in for the
-    first step it sees)."""
+    simulation, in that order, until `detach`): their contact values are those of the increment
+    before it is committed (committing moves the friction anchors, which would blur the stick/slip
+    states) and slip is measured from the state the step began in (from the state it was built in
+    for the first step it sees). Watching keeps a copy of the last two increments' states
+    (`Problem.state`, before their commit); their contact values are assembled only when an
+    output asks for them (a frame, the start of a step's slip, the final state)."""
 
     def __init__(self, simulation, follow: bool = True):
         import ufl
@@ -94,8 +96,8 @@ class Fields:
             self.points = self._by_node([g[0] for g in gathered])
             self.cells = np.vstack([g[1] for g in gathered])
         self.cell_type = "triangle" if dim == 2 else "tetra"
-        self.step, self.contact = None, None
-        self.xi = self.step_start = self._contact_values()["xi"]
+        self.step, self.increments = None, []  # [state before its commit, its contact values once read]
+        self.step_start = self._contact_values()["xi"]
         self.simulation = simulation if follow else None
         if follow:
             simulation.recorder.observers.append(self.capture)
@@ -148,22 +150,36 @@ class Fields:
                     rows[node, 4: 4 + dim] += share * np.asarray(f_t)
 
     def capture(self) -> None:
-        """The contact values of a converged increment, read before it is committed."""
-        self.contact = self._contact_values()
+        """A converged increment, before it is committed: its state kept, its contact values unread."""
+        self.increments = self.increments[-1:] + [[self.problem.state(), None]]
+
+    def _increment_contact(self, increment: list) -> dict:
+        """The contact values of a watched increment, assembled in its state before its commit
+        (restored for the assembly, the state now restored after it) on first request."""
+        if increment[1] is None:
+            now = self.problem.state()
+            self.problem.restore(increment[0])
+            try:
+                increment[1] = self._contact_values()
+            finally:
+                self.problem.restore(now)
+        return increment[1]
 
     def __call__(self, row: dict, cuts: int = 0) -> None:
-        """A converged increment recorded: its contact values are the state's, its step the slip's origin."""
-        if self.contact is None:  # a row computed before it watched (a checkpoint's)
+        """A converged increment recorded: the first of a step sets slip's origin, the step's start."""
+        if not self.increments:  # a row computed before it watched (a checkpoint's)
             return
-        if row["step"] != self.step:  # slip is measured from the state the step began in
-            self.step, self.step_start = row["step"], self.xi
-        self.xi = self.contact["xi"]
+        if row["step"] != self.step:  # slip is measured from the state the step began in: the last increment's
+            self.step = row["step"]
+            if len(self.increments) > 1:
+                self.step_start = self._increment_contact(self.increments[0])["xi"]
 
     def _nodal_contact(self) -> dict:
-        """The contact fields of this rank's owned nodes in the state now: those captured at its
-        increment when it is the last one recorded, else read from the state (slip 0)."""
-        contact = self.contact if self.simulation is not None and self.contact is not None else self._contact_values()
-        start = self.step_start if contact is self.contact else contact["xi"]
+        """The contact fields of this rank's owned nodes in the state now: those of its increment
+        when it is the last one recorded, else read from the state (slip 0)."""
+        latest = self.simulation is not None and self.increments
+        contact = self._increment_contact(self.increments[-1]) if latest else self._contact_values()
+        start = self.step_start if latest else contact["xi"]
         change = contact["xi"] - start
         change -= np.sum(change * contact["normal"], axis=1, keepdims=True) * contact["normal"]
         slip = np.where(contact["contact_status"] > 0, np.linalg.norm(change, axis=1), 0.0)

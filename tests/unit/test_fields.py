@@ -159,3 +159,23 @@ def test_the_final_contact_fields_integrate_to_the_contact_forces(tmp_path):
     top = fields["contact_pressure"].max()
     assert info["peak"]["value"] == top and info["ranges"][0] == pytest.approx((0.0, top))
     assert (tmp_path / "pressure.png").stat().st_size > 0
+
+
+def test_a_run_stopped_mid_step_keeps_its_last_increments_contact_fields(block_2d, tmp_path):
+    """Without a series, fields.npz of a drag stopped by its stop condition after 2 of its 3
+    increments holds that increment's contact state as the series' frame at the same time shows
+    it: read before the increment was committed (committing moves the friction anchors to the
+    slipping nodes, after which they would read as sticking), slip measured since the drag began."""
+    scene = friction_block(2)
+    scene["outputs"]["fields"] = False
+    scene["steps"][1]["stop"] = {"column": "rigid_x", "value": 0.5 * SLIDE}
+    run_contact(scene, tmp_path)
+    assert not (tmp_path / "fields.xdmf").exists()
+    final = np.load(tmp_path / "fields.npz")
+    _, _, frames = read(block_2d / "fields.xdmf")
+    time, nodal, _ = frames[3]
+    assert time == pytest.approx(5 / 3)
+    touching = nodal["contact_pressure"][:, 0] > 0
+    assert touching.sum() >= 20 and np.all(final["contact_status"][touching] == 2)
+    for name in ("displacement", "contact_pressure", "tangential_traction", "contact_status", "slip", "gap"):
+        assert final[name] == pytest.approx(nodal[name].reshape(final[name].shape), rel=1e-12, abs=1e-15), name
