@@ -68,14 +68,19 @@ def section(text: str, heading: str, source: str) -> str:
 
 
 def make_target(results_path: str, root: Path) -> str:
-    """The make target that writes a results file: `make DIR` for results/DIR/..., when the Makefile
-    names that target or studies/DIR.toml exists (a study's target)."""
+    """The make target that writes a results file results/DIR/FILE: `make DIR_FILE` (without the
+    suffix) when the Makefile names it, else `make DIR` when the Makefile names that target or
+    studies/DIR.toml exists (a study's target)."""
     parts = Path(results_path).parts
-    name = parts[1] if len(parts) > 2 and parts[0] == "results" else None
+    if not (len(parts) > 2 and parts[0] == "results"):
+        return "the command its page names"
     makefile = (root / "Makefile").read_text() if (root / "Makefile").exists() else ""
     targets = {word for line in makefile.splitlines() if line.startswith(".PHONY:") for word in line.split()[1:]}
     targets |= set(re.findall(r"^([\w-]+):", makefile, re.M))
-    if name and (name in targets or (root / "studies" / f"{name}.toml").exists()):
+    name = parts[1]
+    if f"{name}_{Path(parts[-1]).stem}" in targets:
+        return f"make {name}_{Path(parts[-1]).stem}"
+    if name in targets or (root / "studies" / f"{name}.toml").exists():
         return f"make {name}"
     return "the command its page names"
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.docs_update import main, update
+from benchmarks.docs_update import main, make_target, update
 from femcontact.errors import InputError
 from femcontact.families.docs import scene_page
 
@@ -69,6 +69,16 @@ def test_blocks_take_their_results_and_missing_ones_name_their_target(tmp_path, 
     again = update(root)
     assert again.updated == [] and again.written == [] and again.unchanged == [("docs/bench.md", "results/bench/bench.md#Goals")]
     assert (root / "docs" / "bench.md").read_text() == text
+
+
+def test_a_results_file_names_the_target_that_writes_it(tmp_path):
+    (tmp_path / "Makefile").write_text(".PHONY: bench bench_hertz_3d\nbench:\n\techo\nbench_hertz_3d:\n\techo\n")
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "wedging.toml").write_text("")
+    assert make_target("results/bench/hertz_3d.md", tmp_path) == "make bench_hertz_3d"  # DIR_FILE first
+    assert make_target("results/bench/bench.md", tmp_path) == "make bench"
+    assert make_target("results/wedging/summary.md", tmp_path) == "make wedging"  # a study's target
+    assert make_target("results/rim_3d/rim_3d.md", tmp_path) == "the command its page names"
 
 
 @pytest.mark.parametrize("page, message", [
