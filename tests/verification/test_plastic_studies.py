@@ -48,10 +48,10 @@ def test_the_least_damaging_pull_rises_with_the_strain_limit_and_brackets_it(wed
 
 
 def test_the_chamfer_crossing_yields_only_above_a_support_stiffness():
-    """The scene's support (K_x 20 N/mm) crosses the chamfer elastically (peak von Mises ~43 MPa);
+    """The scene's support (K_x 20 N/mm) crosses the chamfer elastically (peak von Mises well below yield);
     ten times stiffer it presses the chamfer about ten times harder, and the hole yields: PEEQ
     and a plastic zone, the peak stress on the yield surface."""
-    soft, stiff = crossing(1, 0.25), crossing(10, 0.25)
+    soft, stiff = crossing(1, 0.25, increments=15), crossing(10, 0.25, increments=15)  # 0.1 mm
     assert soft["status"] == stiff["status"] == "ok"
     assert soft["peeq_after_chamfer"] == soft["zone_after_chamfer"] == 0 and soft["peak_von_mises"] < 210
     assert stiff["peeq_after_chamfer"] > 0 and stiff["zone_after_chamfer"] > 0
