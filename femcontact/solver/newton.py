@@ -395,20 +395,12 @@ class SchurNewton:
             a_lo, a_hi, (a, g), flat, level = 0.0, 1.0, (1.0, g1), False, False
             g_lo, g_hi = g0, g1
             for _ in range(ROOT_EVALUATIONS):
-                # root of the quadratic with g(0) = g0, g'(0) = -g0 (Newton) through the last (a, g)
-                c = (g - g0 + g0 * a) / (a * a)
-                if c > 0:
-                    alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c)
-                else:  # g is still g0's line at a_lo: the same quadratic from (a_lo, g_lo) to (a_hi, g_hi)
-                    span = a_hi - a_lo
-                    c = (g_hi - g_lo + g0 * span) / (span * span)
-                    alpha = a_lo + (g0 + np.sqrt(g0 * g0 - 4 * c * g_lo)) / (2 * c) if c > 0 else -1.0
-                if not a_lo < alpha < a_hi:
-                    alpha = 0.5 * (a_lo + a_hi)
-                if flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
-                    alpha = a_lo + FLAT_SHRINK * (a_hi - a_lo)
                 if level:  # g stays level below the jump: bisect the bracket
                     alpha = 0.5 * (a_lo + a_hi)
+                elif flat:  # g kept its value as alpha fell: it jumps (a stick/slip switch) near a_lo
+                    alpha = a_lo + FLAT_SHRINK * (a_hi - a_lo)
+                else:
+                    alpha = self._slope_root(g0, (a, g), (a_lo, g_lo), (a_hi, g_hi))
                 self._update(u0, r0, du, dr, alpha)
                 trial = self.assemble_residual(load)
                 previous, (a, g) = g, (alpha, self._slope(trial, du, dr))
@@ -440,6 +432,22 @@ class SchurNewton:
             best = min(best, (trial_norm if np.isfinite(trial_norm) else np.inf, alpha))
         self._update(u0, r0, du, dr, best[1])
         return self.current_residual(load)
+
+    @staticmethod
+    def _slope_root(g0, last, low, high) -> float:
+        """The next trial of the slope's root search inside the bracket (a_lo, a_hi): the root of the
+        quadratic with g(0) = g0 and Newton's g'(0) = -g0 through the last trial (a, g); where g is
+        still g0's line at a_lo, the same quadratic from (a_lo, g_lo) to (a_hi, g_hi); else the
+        bracket's middle."""
+        (a, g), (a_lo, g_lo), (a_hi, g_hi) = last, low, high
+        c = (g - g0 + g0 * a) / (a * a)
+        if c > 0:
+            alpha = (g0 + np.sqrt(g0 * g0 - 4 * c * g0)) / (2 * c)
+        else:
+            span = a_hi - a_lo
+            c = (g_hi - g_lo + g0 * span) / (span * span)
+            alpha = a_lo + (g0 + np.sqrt(g0 * g0 - 4 * c * g_lo)) / (2 * c) if c > 0 else -1.0
+        return alpha if a_lo < alpha < a_hi else 0.5 * (a_lo + a_hi)
 
     def _into_switch(self, load, u0, r0, du, dr, accepted, rejected):
         """From the halving's accepted (alpha_lo, R_lo) and the rejected (alpha_hi, R_hi) just above
