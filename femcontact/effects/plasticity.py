@@ -36,9 +36,7 @@ class Plasticity(Effect):
         plane_stress = "plane_stress" in problem.effects
 
         def strain(plastic_strain, peeq):
-            if plane_stress:
-                return j2.plane_stress_strain(law.strain(u), plastic_strain, peeq, lmbda, mu, segments)
-            return j2.to_3d(law.strain(u))
+            return j2.return_map_strain(law.strain(u), plastic_strain, peeq, lmbda, mu, segments, plane_stress)
 
         points_strain = strain(q.plastic_strain, q.peeq)
         stress, plastic_strain, peeq = j2.return_map(points_strain, q.plastic_strain, q.peeq, lmbda, mu, segments)

@@ -71,6 +71,15 @@ def plane_stress_strain(strain, plastic_strain, peeq, lmbda, mu, segments, steps
     return full(out_of_plane)
 
 
+def return_map_strain(strain, plastic_strain, peeq, lmbda, mu, segments, plane_stress: bool = False):
+    """The 3 x 3 strain `return_map` takes for the small strain `strain` (2 x 2 or 3 x 3): zero
+    out-of-plane components (plane strain, `to_3d`), or with `plane_stress` the out-of-plane
+    strain that makes the returned sigma_zz vanish (`plane_stress_strain`)."""
+    if plane_stress:
+        return plane_stress_strain(strain, plastic_strain, peeq, lmbda, mu, segments)
+    return to_3d(strain)
+
+
 def in_plane(tensor, dim: int):
     """The leading dim x dim block of a 3 x 3 tensor."""
     return ufl.as_matrix([[tensor[i, j] for j in range(dim)] for i in range(dim)])

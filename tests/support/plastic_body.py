@@ -24,8 +24,7 @@ class PlasticBody:
         self.state = j2.QuadratureState(mesh, degree)
         q = self.state
         segments = j2.hardening_segments(hardening)
-        strain = j2.plane_stress_strain(law.strain(self.u), q.plastic_strain, q.peeq, lmbda, mu, segments) \
-            if plane_stress else j2.to_3d(law.strain(self.u))
+        strain = j2.return_map_strain(law.strain(self.u), q.plastic_strain, q.peeq, lmbda, mu, segments, plane_stress)
         self.stress, plastic_strain, peeq = j2.return_map(strain, q.plastic_strain, q.peeq, lmbda, mu, segments)
         self.residual = ufl.inner(j2.in_plane(self.stress, self.dim), ufl.grad(v)) * q.dx
         if extra is not None:
