@@ -284,6 +284,23 @@ def test_a_high_friction_peg_holds_below_and_leaves_above_its_own_pullout():
     assert peg.pull(1.02 * pullout, "continuous")["dislodged"]
 
 
+def test_a_compliant_fixture_lifts_the_peg_before_it_lets_go():
+    """Blocks 65 times more compliant (E = 2969 MPa, the thesis' wedging set-up): the held peg
+    rises by micrometres elastically before either contact slips (14 um at 10 N, measured at
+    resolution 0.5), and that is still a wedge holding the pull. The pull-out is the 1-DOF
+    first-slip force as for stiff blocks: measured -6.1 % at resolution 0.35 (stiff: -3.8 % at
+    resolution 1); 10 % allowed for the 2.3 deg tilt the compliant wedge takes, which the
+    1-DOF model's fixed contact forces do not follow. A pull-out taken as the force that lifts
+    the peg by a fixed micrometre would be 0.73 N here."""
+    from femcontact.families import load_scene
+    from femcontact.families.dislodging.pull import Puller
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "scenes" / "dislodging_2d.toml",
+                       ["mesh.resolution=0.35", "dislodging.tolerance=0.02", "materials.hole.E=2969.2"])
+    peg = Puller(scene, held_pullout=False)
+    assert peg.pullout["quasi_static_pullout_N"] == pytest.approx(peg.one_dof["first_slip"], rel=0.1)
+
+
 def test_a_pull_that_holds_the_rotation_needs_the_held_pullout(wedged_peg):
     """`dislodging.rotation = "held"`: the peg can only translate during the pull, so it must slide
     at both contacts. A constant pull 2 % under the held quasi-static pull-out holds, 2 % over it

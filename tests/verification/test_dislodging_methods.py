@@ -183,7 +183,7 @@ def test_3d_probes_stream_to_csv_and_resume(tmp_path):
     with open(probes, newline="") as stream:
         rows = list(csv.DictReader(stream))
     assert [(r["method"], r["holds"]) for r in rows] == [("twist_across", "True"), ("twist_across", "False")]
-    assert float(rows[0]["moved_mm"]) < scene["dislodging"]["lift"] and float(rows[0]["zone_A_N"]) > 0
+    assert float(rows[0]["moved_mm"]) < scene["dislodging"]["rise"] and float(rows[0]["zone_A_N"]) > 0
 
     class Resumed(WedgedPeg3D):
         def probe(self, magnitude, method):

@@ -294,7 +294,8 @@ class Puller:
     def holds(self, force: float) -> bool:
         """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
         the exact Newton iteration (no stabilisation) converges from the wedged state to a state
-        with both contact zones loaded and the peg lifted by less than 1e-3 mm (elastic)."""
+        with both contact zones loaded and the peg lifted by less than `rise`, the dynamic pull's
+        event (a compliant fixture lifts a held peg by tens of micrometres before it slides)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, p = self.simulation, self.simulation.problem
@@ -309,7 +310,7 @@ class Puller:
         except (NewtonFailure, FloatingPointError):
             return False
         lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
-        return bool(np.all(sim.zone_forces() > 0) and abs(lift) < 1e-3)
+        return bool(np.all(sim.zone_forces() > 0) and abs(lift) < self.settings["rise"])
 
     @contextmanager
     def rotation(self, held: bool):

@@ -70,8 +70,8 @@ class WedgedPeg3D:
     def probe(self, magnitude: float, method: str) -> dict:
         """Does the wedge hold `magnitude` of `method` (TWISTS_3D) quasi-statically? Yes when the
         exact Newton iteration converges from the wedged state with both contact zones loaded
-        and the peg moved by less than `lift` (mm: along the axis, or the rotation about the
-        load's axis times the peg radius). Its row (PROBE_COLUMNS)."""
+        and the peg moved by less than `rise` (mm: along the axis, or the rotation about the
+        load's axis times the peg radius), the dynamic pull's event. Its row (PROBE_COLUMNS)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, s = self.simulation, self.settings
@@ -106,7 +106,7 @@ class WedgedPeg3D:
                      else float(np.dot(r[3:] - r0[3:], self.direction(method))) * self.scene["peg"]["width"] / 2)
             R_u, R_r, _ = sim.newton.current_residual(load)
             row.update(residual_N=sim.newton.norm(R_u, R_r), moved_mm=moved,
-                       holds=bool(np.all(zones > 0) and abs(moved) < s["lift"]))
+                       holds=bool(np.all(zones > 0) and abs(moved) < s["rise"]))
         row["wall_s"] = time.perf_counter() - start
         return row
 

@@ -31,7 +31,8 @@ DISLODGING = {
                      "times the quasi-static pull-out force (widened until it brackets)"),
     "tolerance": Field("float", 0.01, "bisection stops at this bracket width (N)", positive=True),
     "rise": Field("float", 0.5, "event 'dislodged': the peg's reference point risen this much (mm), "
-                  "or both contact zones open", positive=True),
+                  "or both contact zones open; a quasi-static pull-out state moved this much is not held",
+                  positive=True),
     "frame": Field("float", 0.005, "the thesis' output frame (s), for the frame-quantised impulse", positive=True),
     "dt_max": Field("float", 5e-3, "largest time increment of the dynamic pull (s)", positive=True),
     "dt_min": Field("float", 1e-8, "smallest time increment (s)", positive=True),
@@ -92,8 +93,6 @@ METHODS_TABLE = {
     "peak_shapes": Field("strs", list(SHAPES), "task 'optimise_peak': pulse shapes searched", choices=SHAPES),
     "peak_evaluations": Field("int", 6, "task 'optimise_peak': Nelder-Mead evaluations (each a bisection for the "
                               "threshold peak) per shape", min=3),
-    "lift": Field("float", 1e-3, "quasi-static pull-out: the wedge holds while the peg lifts less than this (mm)",
-                  positive=True),
 }
 
 
