@@ -46,6 +46,58 @@ from mpi4py import MPI
 
 PULL_STEP, OBSERVE_STEP = 2, 3
 PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
+CONTINUATION_LOADS = 4
+"""Loads from the largest one held up to a quasi-static probe whose solve from the wedged state
+failed (`quasi_static_probe`)."""
+RAMP_LOADS = 8
+"""Loads up to the first guess of a quasi-static threshold that `largest_held` tries in turn."""
+
+
+def largest_held(holds, high: float, tolerance: float, doublings: int = 0) -> tuple[float, float, int]:
+    """(low, high, probes): the largest load that `holds` (magnitude -> bool) holds, bracketed to
+    `tolerance`. The loads high / RAMP_LOADS, 2 high / RAMP_LOADS, ... high, then high doubled up
+    to `doublings` times, are tried in turn up to the first one not held, and the bracket between
+    it and the last one held is bisected: each probe has the equilibria held below it to start
+    from (`quasi_static_probe`). RuntimeError if every load is held."""
+    loads = [high * k / RAMP_LOADS for k in range(1, RAMP_LOADS + 1)] + [high * 2 ** j for j in range(1, doublings + 1)]
+    low, probes = 0.0, 0
+    for load in loads:
+        probes += 1
+        if not holds(load):
+            high = load
+            break
+        low = load
+    else:
+        raise RuntimeError(f"the wedge holds {low:.4g}, the largest load tried")
+    while high - low > tolerance * (1 + 1e-9):
+        middle, probes = (low + high) / 2, probes + 1
+        if holds(middle):
+            low = middle
+        else:
+            high = middle
+    return low, high, probes
+
+
+def quasi_static_probe(simulation, wedged: dict, solve_at, magnitude: float, held: dict) -> int:
+    """Newton iterations of the quasi-static equilibrium under the load `magnitude`, left solved.
+    `solve_at(m)` sets the load m and solves from the current state (raising NewtonFailure);
+    `held` maps magnitudes already held to their equilibria (`Problem.state`). Solved from the
+    wedged state; where that fails, from the equilibrium of the largest magnitude held below it,
+    through CONTINUATION_LOADS loads up to it. These are the same equations (nothing is committed
+    between probes: friction's anchors are the wedged state's) from a closer start: a Newton
+    solve that fails from afar is no proof that the wedge lets go. Raises the last failure."""
+    from femcontact.solver.newton import NewtonFailure
+
+    simulation.resume(wedged)
+    try:
+        return solve_at(magnitude)
+    except (NewtonFailure, FloatingPointError):
+        below = [m for m in held if m < magnitude]
+        if not below:
+            raise
+    start = max(below)
+    simulation.problem.restore(held[start])
+    return sum(solve_at(m) for m in np.linspace(start, magnitude, CONTINUATION_LOADS + 1)[1:])
 
 # -- impulses ------------------------------------------------------------------------------
 
@@ -129,6 +181,7 @@ class Puller:
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
         self.rotation_held = self.settings["rotation"] == "held"
+        self.held_states = {}  # the rigid body's modes -> {pull (N): equilibrium held} (`holds`)
         self.plasticity = next((c for c in sim.problem.components if c.name == "plasticity"), None)
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
@@ -293,24 +346,31 @@ class Puller:
 
     def holds(self, force: float) -> bool:
         """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
-        the exact Newton iteration (no stabilisation) converges from the wedged state to a state
+        the exact Newton iteration (no stabilisation; `quasi_static_probe`) converges to a state
         with both contact zones loaded and the peg lifted by less than `rise`, the dynamic pull's
         event (a compliant fixture lifts a held peg by tens of micrometres before it slides)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, p = self.simulation, self.simulation.problem
-        sim.resume(self.wedged)
         sim.time_stepping.active = False
-        self._set_pull(force, "continuous", 0.0)
         duration = sim.scene["steps"][PULL_STEP]["duration"]
-        load = sim.schedule.load(PULL_STEP, duration, duration)
-        load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
+
+        def solve_at(magnitude):
+            self._set_pull(magnitude, "continuous", 0.0)
+            load = sim.schedule.load(PULL_STEP, duration, duration)
+            load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
+            return sim.solve(load, stabilize=False)
+
+        held = self.held_states.setdefault(tuple(p.rigid.modes), {})
         try:
-            sim.solve(load, stabilize=False)
+            quasi_static_probe(sim, self.wedged, solve_at, force, held)
         except (NewtonFailure, FloatingPointError):
             return False
         lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
-        return bool(np.all(sim.zone_forces() > 0) and abs(lift) < self.settings["rise"])
+        if np.all(sim.zone_forces() > 0) and abs(lift) < self.settings["rise"]:
+            held[force] = p.state()
+            return True
+        return False
 
     @contextmanager
     def rotation(self, held: bool):
@@ -328,22 +388,14 @@ class Puller:
             sim.held = None
 
     def quasi_static_pullout(self, rotation_held: bool = False) -> dict:
-        """The largest pull the wedge holds quasi-statically, by bisection to `tolerance` between
-        0 and 1.5 times the 1-DOF full-slide force (a slow ramp without inertia, each force solved
-        from the wedged state: in stick the response is elastic, hence path-independent).
+        """The largest pull the wedge holds quasi-statically, to `tolerance`, up to 1.5 times the
+        1-DOF full-slide force (`largest_held`; no inertia, each force solved from the wedged
+        state or from a held equilibrium below it: the same equations, friction anchored at the
+        wedged state).
         `rotation_held`: the peg's rotation is held at its wedged angle (a pull that also
         restrains the rotation, for comparison with the 1-DOF full-slide force)."""
         with self.rotation(rotation_held):
-            tolerance = self.settings["tolerance"]
-            low, high = 0.0, 1.5 * self.one_dof["full_slide"]
-            if self.holds(high):
-                raise RuntimeError(f"the wedge holds {high:.4g} N, 1.5 times the 1-DOF full-slide force")
-            while high - low > tolerance * (1 + 1e-9):
-                middle = (low + high) / 2
-                if self.holds(middle):
-                    low = middle
-                else:
-                    high = middle
+            low, high, _ = largest_held(self.holds, 1.5 * self.one_dof["full_slide"], self.settings["tolerance"])
         return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
 
 

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from femcontact.families.dislodging.pull import PULL_STEP, one_dof_thresholds, wedged_simulation
+from femcontact.families.dislodging.pull import (PULL_STEP, largest_held, one_dof_thresholds, quasi_static_probe,
+                                                 wedged_simulation)
 from femcontact.io import read_csv
 from femcontact.problem.loading import Schedule
 
@@ -55,6 +56,7 @@ class WedgedPeg3D:
         self.tilt = rigid.tilt()
         self.contacts = contacts_on_axis(self.wedged_row, self.axis, 3)
         self.comm = MPI.COMM_WORLD
+        self.held_states = {}  # method -> {magnitude: equilibrium held}, for `quasi_static_probe`
         self.probes = Path(probes) if probes else None
         known = []
         if self.probes and self.comm.rank == 0 and self.probes.is_file():
@@ -69,26 +71,32 @@ class WedgedPeg3D:
 
     def probe(self, magnitude: float, method: str) -> dict:
         """Does the wedge hold `magnitude` of `method` (TWISTS_3D) quasi-statically? Yes when the
-        exact Newton iteration converges from the wedged state with both contact zones loaded
+        exact Newton iteration (`quasi_static_probe`: from the wedged state, else on from the
+        largest magnitude held in this process) converges with both contact zones loaded
         and the peg moved by less than `rise` (mm: along the axis, or the rotation about the
         load's axis times the peg radius), the dynamic pull's event. Its row (PROBE_COLUMNS)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, s = self.simulation, self.settings
         start = time.perf_counter()
-        sim.resume(self.wedged)
         pull = sim.scene["steps"][PULL_STEP]
-        vector = list(magnitude * self.direction(method))
-        pull.update(force=vector if method == "continuous" else [], moment=[] if method == "continuous" else vector,
-                    amplitude="step", load_point="peg_top")
-        sim.schedule = Schedule(sim.scene, sim.problem.rigid, sim.schedule.points)
-        duration = pull["duration"]
-        load = sim.schedule.load(PULL_STEP, duration, duration)
         r0 = self.wedged["state"]["r"]
-        load.motion = r0.copy()
+        load = None
+
+        def solve_at(value):
+            nonlocal load
+            vector = list(value * self.direction(method))
+            pull.update(force=vector if method == "continuous" else [], moment=[] if method == "continuous" else vector,
+                        amplitude="step", load_point="peg_top")
+            sim.schedule = Schedule(sim.scene, sim.problem.rigid, sim.schedule.points)
+            load = sim.schedule.load(PULL_STEP, pull["duration"], pull["duration"])
+            load.motion = r0.copy()
+            return sim.solve(load, stabilize=False)
+
+        held = self.held_states.setdefault(method, {})
         row = {"method": method, "magnitude": float(magnitude), "reason": ""}
         try:
-            row["newton_iterations"] = sim.solve(load, stabilize=False)
+            row["newton_iterations"] = quasi_static_probe(sim, self.wedged, solve_at, magnitude, held)
             converged = True
         except NewtonFailure as failure:
             converged = False
@@ -107,6 +115,8 @@ class WedgedPeg3D:
             R_u, R_r, _ = sim.newton.current_residual(load)
             row.update(residual_N=sim.newton.norm(R_u, R_r), moved_mm=moved,
                        holds=bool(np.all(zones > 0) and abs(moved) < s["rise"]))
+            if row["holds"]:
+                held[magnitude] = sim.problem.state()
         row["wall_s"] = time.perf_counter() - start
         return row
 
@@ -126,21 +136,10 @@ class WedgedPeg3D:
         return self.known[key]
 
     def threshold(self, method: str, high: float) -> dict:
-        """Largest magnitude the wedge holds, by bisection from [0, high] (high doubled until the
-        wedge lets go, at most 4 times) to `tolerance` (N; torques: tolerance x the peg radius)."""
+        """Largest magnitude the wedge holds (`largest_held` from the guess `high`, doubled at most
+        4 times) to `tolerance` (N; torques: tolerance x the peg radius)."""
         tolerance = self.settings["tolerance"] * (self.scene["peg"]["width"] / 2 if method != "continuous" else 1.0)
-        low, solves = 0.0, 1
-        while self.holds(high, method):
-            low, high, solves = high, 2 * high, solves + 1
-            if solves > 5:
-                raise RuntimeError(f"the 3-D wedge holds {low:.4g} ({method})")
-        while high - low > tolerance * (1 + 1e-9):
-            middle = (low + high) / 2
-            solves += 1
-            if self.holds(middle, method):
-                low = middle
-            else:
-                high = middle
+        low, high, solves = largest_held(lambda magnitude: self.holds(magnitude, method), high, tolerance, doublings=4)
         return {"threshold": low, "bracket": high - low, "solves": solves}
 
 
