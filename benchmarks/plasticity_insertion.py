@@ -33,9 +33,9 @@ OUT = Path("results/plasticity_insertion")
 SCENE = SCENES / "insertion_2d.toml"
 KX, KTHETA = 20.0, 3000.0
 FACTORS = (1, 2, 3, 4, 5, 6, 8, 10, 30)
+"""Multiples of the scene's K_x and K_theta."""
 INCREMENTS = 300
 """Increments of the 1.5 mm crossing (0.005 mm each)."""
-"""Multiples of the scene's K_x and K_theta."""
 CROSSING = ["effects=['friction', 'plane_strain', 'compliant_support', 'plasticity']",
             "plasticity.hardening=[[0, 210], [1, 290]]", "steps.0.support_motion={y=-1.5}",
             "steps.0.stop={column='support_Fy', value=1000.0}"]
