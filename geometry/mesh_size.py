@@ -11,9 +11,9 @@ c h^n being the area or volume of an equilateral element of edge h, with the mea
 the body within d of the fine set from a tube formula (fine curves of total length L in
 2-D: L d; 3-D balls of radius z around the two contact points, a top strip or disc for a
 block), capped by the body's measure. It raises InputError naming the keys when N
-exceeds MAX_ELEMENTS, or when the contact size exceeds the fine zone's half-length (a
-zone holding less than one element). Measured against gmsh for the example scenes: the
-estimate is 0.8-2.3x the actual count (tests/test_bad_input.py checks 0.5-3x).
+exceeds `mesh.max_elements` (MAX_ELEMENTS by default), or when the contact size exceeds the
+fine zone's half-length (a zone holding less than one element). Measured against gmsh for
+the example scenes: the estimate is 0.8-2.3x the actual count (tests/test_bad_input.py checks 0.5-3x).
 """
 import math
 
@@ -23,7 +23,7 @@ from geometry import gmsh_tools
 from geometry.errors import InputError
 
 MAX_ELEMENTS = 2_000_000
-"""Ceiling on the estimated elements of one mesh (about 2 GB for gmsh and DOLFINx in 3-D)."""
+"""Default ceiling on the estimated elements of one mesh (`mesh.max_elements`)."""
 
 ELEMENT = {2: math.sqrt(3) / 4, 3: 1 / (6 * math.sqrt(2))}
 
@@ -118,12 +118,13 @@ def check(scene: dict, sz) -> float:
         raise InputError(f"mesh too coarse: the contact size exceeds the fine zone ({settings}); raise "
                             "mesh.resolution, lower mesh.contact_size or raise mesh.contact_zone")
     elements = estimate(scene, sz)
-    if elements > MAX_ELEMENTS:
+    ceiling = mesh.get("max_elements", MAX_ELEMENTS)
+    if elements > ceiling:
         keys = size_keys(scene)
         sizes = ", ".join(f"{key} = {_get(scene, key):g}" for key in keys)
-        raise InputError(f"mesh too large: about {elements:.2g} elements, more than {MAX_ELEMENTS:.0e} "
-                            f"({settings}; {sizes}); lower mesh.resolution, raise mesh.contact_size or "
-                            f"mesh.size_max, or shrink {' / '.join(keys)}")
+        raise InputError(f"mesh too large: about {elements:.2g} elements, more than mesh.max_elements = "
+                            f"{ceiling:.2g} ({settings}; {sizes}); lower mesh.resolution, raise mesh.contact_size "
+                            f"or mesh.size_max, shrink {' / '.join(keys)}, or raise mesh.max_elements on purpose")
     return elements
 
 

@@ -134,6 +134,10 @@ MESH = {
     "contact_zone": Field("float", 0.0, "half-length of each fine contact zone (mm), independent of "
                           "`resolution`; 0 = automatic (see docs/geometry.md)", min=0.0),
     "degree": Field("int", 1, "Lagrange degree of the displacement", choices=(1, 2)),
+    "max_elements": Field("int", 2_000_000, "largest estimated number of elements a run may mesh: a guard "
+                          "against a mistyped size; raise it on purpose for a large mesh (3-D wedging at 4.8 million "
+                          "estimated elements, 1.03M unknowns: 3.7 GB on one rank with the iterative solver, "
+                          "docs/bench.md)", min=1),
 }
 
 CONTACT = {
@@ -216,6 +220,12 @@ SOLVER = {
     "contact_update": Field("bool", True, "where the bulk stiffness does not depend on the state (small strain), "
                             "factor it once and add the contact's few rows by a low-rank update (Woodbury); "
                             "off: factor the whole Jacobian every Newton iteration"),
+    "linear": Field("str", "auto", "the linear solver: 'direct' (MUMPS LU; with `contact_update`, the bulk "
+                    "factored once), 'iterative' (GMRES preconditioned by algebraic multigrid, a residual 1e-6 of "
+                    "the right-hand side's; memory about linear in the unknowns) or 'auto' (iterative from 300,000 "
+                    "unknowns, where it becomes the faster and the direct factor's memory passes 10 GB; "
+                    "docs/bench.md)",
+                    choices=("auto", "direct", "iterative")),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),
 }

@@ -29,6 +29,8 @@ class SolverOptions:
     """Before damping, retry a rejected full step along the residual's curvature."""
     contact_update: bool
     """Factor a state-independent bulk stiffness once and add the contact by a low-rank update."""
+    linear: str
+    """'direct', 'iterative' or 'auto' (`femcontact.solver.linear.linear_solver`)."""
     petsc_options: MappingProxyType
     """PETSc options of the linear solver, prefix-free (e.g. {"pc_type": "lu"})."""
     stabilization_factors: tuple = (1.0, 1e-1, 1e-2, 1e-4, 1e-6, 0.0)

@@ -1,9 +1,11 @@
 """The linear solves of a Newton iteration: K X = B for the residual and the rigid columns at once.
 
-K = K_bulk + K_contact. Two strategies, both direct (MUMPS through PETSc, solving all
-right-hand sides in one call to the factor):
+K = K_bulk + K_contact. `linear_solver` picks the strategy (`solver.linear`, and the size):
 
-- `Factorization`: K is assembled and factored every iteration.
+- `Factorization`: K is assembled and factored every iteration (MUMPS), or with
+  `ITERATIVE_PETSC_OPTIONS` solved by GMRES preconditioned by algebraic multigrid (GAMG with
+  the elastic near-nullspace, its set-up redone on each new K and its interpolation reused),
+  one Krylov solve per right-hand side.
 - `ContactUpdate`: where the bulk stiffness does not depend on the state (small-strain
   elasticity; a mass term at a fixed time step), K_bulk is factored once. The contact part is
   nonzero only on the dofs S of the active contact's cells (a few hundred in 3-D), K_contact =
@@ -15,8 +17,9 @@ right-hand sides in one call to the factor):
   stays put. A refactorisation follows a change in the bulk stiffness's constants (dt);
   a contact set larger than `max_rank` falls back to `Factorization` for that iteration.
 
-Supported dofs are identity rows of K_bulk and are left out of S (their right-hand sides
-are zero). `check_petsc_options` asks this PETSc whether the solver types a scene names exist.
+The direct strategies solve all right-hand sides in one call to the factor. Supported dofs are
+identity rows of K_bulk and are left out of S (their right-hand sides are zero).
+`check_petsc_options` asks this PETSc whether the solver types a scene names exist.
 """
 import functools
 
@@ -28,6 +31,14 @@ from petsc4py import PETSc
 from femcontact.errors import InputError
 
 DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+ITERATIVE_PETSC_OPTIONS = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "pc_type": "gamg",
+                           "pc_gamg_reuse_interpolation": True, "ksp_rtol": 1e-6, "ksp_atol": 1e-14,
+                           "ksp_max_it": 2000}
+ITERATIVE_DOFS = 300_000
+"""Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging
+(`make bench_solvers`) the direct solver was the faster per increment at 227k unknowns (5.4 GB)
+and the iterative one at 447k, where the direct one took 22 GB and, its contact update's columns
+capped by COLUMN_BYTES, refactored every iteration."""
 COLUMN_BYTES = 2e8
 """Largest memory (bytes per rank) the cached columns of K_bulk^-1 may take."""
 
@@ -124,16 +135,8 @@ class Factorization:
     def solve(self, rhs: list) -> list:
         """K^-1 applied to each Vec of `rhs`; new Vecs, ghosts updated."""
         if not self.direct:
-            return [self._solve_one(b) for b in rhs]
+            return [_krylov_solve(self.ksp, b) for b in rhs]
         return _from_columns(_mat_solve(self.ksp, [b.array_r for b in rhs], self.K), rhs[0])
-
-    def _solve_one(self, b):
-        x = b.duplicate()
-        self.ksp.solve(b, x)
-        if self.ksp.getConvergedReason() < 0:
-            raise LinearSolveFailed(f"linear solver failed (PETSc reason {self.ksp.getConvergedReason()})")
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        return x
 
 
 class ContactUpdate:
@@ -235,6 +238,16 @@ class ContactUpdate:
         return _from_columns(Y, rhs[0])
 
 
+def _krylov_solve(ksp, b):
+    """ksp's operator's inverse applied to b by its Krylov method; a new Vec, ghosts updated."""
+    x = b.duplicate()
+    ksp.solve(b, x)
+    if ksp.getConvergedReason() < 0:
+        raise LinearSolveFailed(f"linear solver failed (PETSc reason {ksp.getConvergedReason()})")
+    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    return x
+
+
 def _direct(ksp) -> bool:
     return ksp.getType() == "preonly" and ksp.getPC().getType() == "lu"
 
@@ -283,8 +296,14 @@ def _from_columns(X: np.ndarray, like) -> list:
 
 
 def linear_solver(problem, options, prefix: str, near_nullspace=None):
-    """`ContactUpdate` where it applies (`options.contact_update` on, a state-independent bulk
-    stiffness, a direct solver), else `Factorization`; `options` a `SolverOptions`."""
+    """The linear solver `options.linear` names ('auto': iterative from `ITERATIVE_DOFS`
+    unknowns, else direct), `options` a `SolverOptions`. Iterative: `Factorization` with
+    `ITERATIVE_PETSC_OPTIONS` under the scene's own. Direct: `ContactUpdate` where it applies
+    (`options.contact_update` on, a state-independent bulk stiffness, a direct solver), else
+    `Factorization`."""
+    dofs = problem.V.dofmap.index_map.size_global * problem.V.dofmap.index_map_bs
+    if options.linear == "iterative" or (options.linear == "auto" and dofs >= ITERATIVE_DOFS):
+        return Factorization(problem, {**ITERATIVE_PETSC_OPTIONS, **options.petsc_options}, prefix, near_nullspace)
     if options.contact_update and problem.forms.jacobian_bulk is not None:
         update = ContactUpdate(problem, options.petsc_options, prefix)
         if update.direct:

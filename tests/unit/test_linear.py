@@ -1,4 +1,4 @@
-"""The low-rank contact update (solver/linear.py) gives the Newton direction of the full factorisation.
+"""The linear solvers (solver/linear.py) give the Newton direction of the full factorisation.
 
 At a state with active, sliding contact (the coarse 3-D wedged cylinder after its first load
 increment; 2-D wedging with its rigid corners), the Newton direction (du, dr) from
@@ -6,7 +6,12 @@ increment; 2-D wedging with its rigid corners), the Newton direction (du, dr) fr
 `Factorization` (the whole Jacobian factored) to round-off: 1e-8 relative, where both are
 exact solves of the same system with condition numbers up to ~1e6. The update is also
 checked when it must fall back to the full factorisation (a contact set above its rank cap),
-and to be used only where the bulk stiffness is state-independent.
+and to be used only where the bulk stiffness is state-independent. The iterative solver (GMRES
+and algebraic multigrid, `solver.linear = "iterative"`) stops at a residual 1e-6 of the
+right-hand side's: its direction may differ by that times the preconditioned operator's
+condition number (tens for multigrid), so it is held to 1e-4; a whole run with it must
+reach the same converged states as the direct solver's, to Newton's tolerance (1e-9 relative
+of the load) plus that of the increments' paths (1e-6).
 """
 from pathlib import Path
 
@@ -14,15 +19,19 @@ import numpy as np
 import pytest
 
 from femcontact.families import load_scene
+from femcontact.config.scene import SOLVER
+from femcontact.errors import InputError
+from femcontact.solver import linear
 from femcontact.solver.linear import ContactUpdate, Factorization
 from femcontact.solver.stepping import Simulation
 
 SCENES = Path(__file__).parents[2] / "scenes"
 
 
-def directions(scene_file: str, overrides: list, max_rank=None):
+def directions(scene_file: str, overrides: list, max_rank=None, options=None):
     """Newton directions after one converged increment (the next increment's first iteration),
-    from the scene's own `ContactUpdate` and from a `Factorization` of the same problem."""
+    from the scene's own `ContactUpdate` and from a `Factorization` of the same problem with
+    the PETSc `options` (default: the scene's, a direct solve)."""
     simulation = Simulation(load_scene(SCENES / scene_file, overrides))
     step = simulation.scene["steps"][0]
     dt = step["duration"] / step["increments"]
@@ -35,7 +44,8 @@ def directions(scene_file: str, overrides: list, max_rank=None):
     R_u, R_r, _ = newton.assemble_residual(load)
     du, dr = newton.direction(load, R_u, R_r)
     update = (du.array.copy(), dr.copy(), newton.linear)
-    newton.linear = Factorization(simulation.problem, simulation.options.petsc_options, "full_")
+    newton.linear = Factorization(simulation.problem, options or simulation.options.petsc_options, "full_",
+                                  newton._near_nullspace)
     du, dr = newton.direction(load, R_u, R_r)
     return update, (du.array.copy(), dr.copy())
 
@@ -63,3 +73,41 @@ def test_state_dependent_bulk_is_factored_every_iteration():
     simulation = Simulation(scene)
     assert simulation.problem.forms.jacobian_bulk is None
     assert isinstance(simulation.newton.linear, Factorization)
+
+
+def test_iterative_solver_gives_the_direct_direction():
+    options = {**linear.ITERATIVE_PETSC_OPTIONS}
+    (du, dr, _), (du_iterative, dr_iterative) = directions("wedging_3d.toml", ["mesh.resolution=0.4"],
+                                                           options=options)
+    assert np.linalg.norm(du_iterative - du) <= 1e-4 * np.linalg.norm(du)
+    assert np.linalg.norm(dr_iterative - dr) <= 1e-4 * np.linalg.norm(dr)
+
+
+def step_ends(overrides: list) -> tuple[dict, object]:
+    simulation = Simulation(load_scene(SCENES / "wedging_3d.toml", ["mesh.resolution=0.4"] + overrides))
+    simulation.run()
+    return simulation.step_end_rows(), simulation.newton.linear
+
+
+def test_a_run_with_the_iterative_solver_reaches_the_direct_solvers_states():
+    direct, direct_solver = step_ends([])
+    iterative, iterative_solver = step_ends(["solver.linear='iterative'"])
+    assert isinstance(direct_solver, ContactUpdate)
+    assert iterative_solver.ksp.getType() == "gmres" and iterative_solver.ksp.getPC().getType() == "gamg"
+    assert direct["release"]["contact_B_force"] > 25.0  # wedged: more than the couple's force 1000/40 N
+    for step in ("load", "release"):
+        for column in ("contact_A_Fx", "contact_A_Fz", "contact_B_Fx", "contact_B_Fz", "tilt_deg"):
+            assert iterative[step][column] == pytest.approx(direct[step][column], rel=1e-6, abs=1e-6), (step, column)
+
+
+def test_auto_chooses_the_iterative_solver_from_its_size(monkeypatch):
+    assert f"from {linear.ITERATIVE_DOFS:,} unknowns" in SOLVER["linear"].doc  # the scene's documentation
+    monkeypatch.setattr(linear, "ITERATIVE_DOFS", 1000)
+    simulation = Simulation(load_scene(SCENES / "wedging_3d.toml", ["mesh.resolution=0.4"]))
+    assert simulation.dofs >= 1000
+    assert simulation.newton.linear.ksp.getType() == "gmres"
+
+
+def test_an_unknown_linear_solver_is_refused():
+    with pytest.raises(InputError, match="solver.linear"):
+        load_scene(SCENES / "wedging_3d.toml", ["solver.linear='cholesky'"])
