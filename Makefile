@@ -27,7 +27,7 @@ STUDY_FILES := $(wildcard studies/*.toml)
 STUDIES := $(filter-out dislodging_methods_2d dislodging_methods_3d dislodging_methods_frequency,$(basename $(notdir $(STUDY_FILES))))
 DEFAULT_STUDY := wedging
 
-.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d bench_solvers accuracy stability plasticity plasticity_dislodging plasticity_insertion plasticity_wedging rim_3d clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
+.PHONY: setup test test-serial test-mpi test-slurm test-paraview study docs bench bench_hertz_3d bench_solvers convergence_3d accuracy stability plasticity plasticity_dislodging plasticity_insertion plasticity_wedging rim_3d clean dislodging_methods dislodging_methods_3d dislodging_methods_frequency dislodging_beyond dislodging_beyond_3d dislodging_beyond_frequency $(STUDIES)
 
 setup: $(STAMPS)/venv
 
@@ -131,6 +131,11 @@ bench_hertz_3d: setup
 # direct and iterative linear solvers, 1 and 2 ranks (also the end of `make bench`): results/bench/solvers.md
 bench_solvers: setup
 	$(PY) -m benchmarks.solver_scaling
+
+# The 3-D wedging answers on a ladder of meshes (resolution 1 to 2.83, 2 ranks) with their Richardson
+# extrapolation and discretisation error: results/convergence_3d/convergence_3d.md
+convergence_3d: setup
+	$(PY) -m benchmarks.convergence_3d
 
 # Plasticity on the wedging case, an edge radius under refinement, its cost; results/plasticity/plasticity.md
 plasticity: setup

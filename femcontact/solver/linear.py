@@ -34,11 +34,12 @@ DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_
 ITERATIVE_PETSC_OPTIONS = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "pc_type": "gamg",
                            "pc_gamg_reuse_interpolation": True, "ksp_rtol": 1e-6, "ksp_atol": 1e-14,
                            "ksp_max_it": 2000}
-ITERATIVE_DOFS = 300_000
-"""Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging
-(`make bench_solvers`) the direct solver was the faster per increment at 227k unknowns (5.4 GB)
-and the iterative one at 447k, where the direct one took 22 GB and, its contact update's columns
-capped by COLUMN_BYTES, refactored every iteration."""
+ITERATIVE_DOFS = 150_000
+"""Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging on 2
+ranks the direct solver ran the whole scene at 109k unknowns in 4 min (118 Newton iterations),
+but at 288k its first increment ended 13 min after the start: the contact set outgrows the
+update's columns (COLUMN_BYTES) and every iteration factors the whole Jacobian again
+(`make bench_solvers`, `make convergence_3d`)."""
 COLUMN_BYTES = 2e8
 """Largest memory (bytes per rank) the cached columns of K_bulk^-1 may take."""
 

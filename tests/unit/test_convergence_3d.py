@@ -1,0 +1,35 @@
+"""The 3-D convergence report (benchmarks/convergence_3d.py, `make convergence_3d`) on made-up
+rungs: a quantity f(h) = f0 + C h^2 on meshes refined by sqrt(2) is extrapolated to f0 with
+order 2, and the finest rung's error is |f(h_finest) - f0| / f0; a failed rung is left out."""
+import pytest
+
+from benchmarks import convergence_3d
+
+
+def rows(f0: float = 70.0, c: float = -5.0, order: float = 2.0) -> list[dict]:
+    out = []
+    for resolution in convergence_3d.LADDER:
+        h = 1.0 / resolution
+        row = {"resolution": resolution, "status": "ok", "dofs": int(17000 * resolution ** 2.7),
+               "newton_iterations": 90, "wall_time": 10.0}
+        row.update({key: f0 + c * h ** order for key in convergence_3d.QUANTITIES})
+        out.append(row)
+    return out
+
+
+def test_richardson_recovers_the_limit_and_the_order():
+    table = convergence_3d.extrapolation(rows())
+    assert len(table) == len(convergence_3d.QUANTITIES)
+    for entry in table:
+        assert entry["limit"] == pytest.approx(70.0, rel=1e-12)
+        assert entry["order"] == pytest.approx(2.0, rel=1e-9)
+        assert entry["error"] == pytest.approx(5.0 / 8.0 / 70.0, rel=1e-9)  # h_finest^2 = 1/8
+    assert "| contact force at A after release (N) | 69.375 | 70 | 2.00 | 0.89% | yes |" in convergence_3d.report(rows())
+
+
+def test_a_failed_rung_is_left_out_of_the_extrapolation():
+    data = rows()
+    data[-1].update(status="failed", **{key: None for key in convergence_3d.QUANTITIES})
+    table = convergence_3d.extrapolation(data)  # the three ok rungs: still f0 exactly
+    assert table[0]["limit"] == pytest.approx(70.0, rel=1e-12)
+    assert "failed" in convergence_3d.report(data)
