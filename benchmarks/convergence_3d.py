@@ -13,13 +13,12 @@ results/convergence_3d/convergence_3d.md and .json after every rung.
     python -m benchmarks.convergence_3d [--resolutions 1 1.4142 2 2.8284] [--ranks 2]
 """
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 
 from femcontact.families.repository import SCENES
-from femcontact.io import write_json_atomic, write_text_atomic
+from femcontact.io import read_result, write_json_atomic, write_text_atomic
 from femcontact.outputs.tables import markdown_table
 from femcontact.references.richardson import richardson
 
@@ -44,10 +43,8 @@ TARGET = 0.01
 def rung(resolution: float, ranks: int) -> dict:
     """One rung: its result (run, or read when it exists) as a row."""
     out = (OUT / f"r{resolution:.4f}").resolve()
-    path = out / "result.json"
-    if path.exists() and json.loads(path.read_text())["status"] == "ok":
-        result = json.loads(path.read_text())
-    else:
+    result = read_result(out)
+    if result is None or result["status"] != "ok":
         result, _ = run_scene(SCENES / "wedging_3d.toml", ranks, out,
                               {"mesh.resolution": resolution, "mesh.max_elements": 10_000_000})
     metrics = result["metrics"]

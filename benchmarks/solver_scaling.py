@@ -19,17 +19,19 @@ it measured; a new measurement replaces its row).
 import argparse
 import json
 import math
-import os
 import resource
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-from benchmarks.bench import OUT
+import numpy as np
+
+from femcontact.families.repository import SCENES
 from femcontact.io import write_json_atomic, write_text_atomic
 
-SCENE = Path(__file__).resolve().parents[1] / "scenes" / "wedging_3d.toml"
+from benchmarks.bench import OUT, _run
+
+SCENE = SCENES / "wedging_3d.toml"
 RESOLUTIONS = (1.0, 2.0, 2.6, 3.3, 4.4)
 """Mesh resolutions: 17k, 109k, 227k, 447k and about 1.03M unknowns."""
 ITERATIONS = 4
@@ -87,13 +89,8 @@ def measure(resolution: float, solver: str) -> dict:
 
 def run(resolution: float, solver: str, ranks: int) -> dict | None:
     """One measurement as a whole process; None (reason on stderr) when it fails."""
-    command = ["mpirun", "-n", str(ranks), sys.executable, "-m", "benchmarks.solver_scaling",
-               "--worker", str(resolution), solver]
-    done = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
-    if done.returncode != 0:
-        print(f"  failed ({done.returncode}): {' '.join(command)}\n{done.stderr[-1500:]}", file=sys.stderr)
-        return None
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return _run(["mpirun", "-n", str(ranks), sys.executable, "-m", "benchmarks.solver_scaling",
+                 "--worker", str(resolution), solver])
 
 
 def predicted_memory(rows: list[dict], resolution: float, solver: str, ranks: int) -> float:
@@ -118,10 +115,7 @@ def exponent(rows: list[dict], key: str) -> float | None:
     """Least-squares slope of log(rows[key]) against log(dofs); None below two rows."""
     if len(rows) < 2:
         return None
-    x = [math.log(r["dofs"]) for r in rows]
-    y = [math.log(r[key]) for r in rows]
-    mx, my = sum(x) / len(x), sum(y) / len(y)
-    return sum((a - mx) * (b - my) for a, b in zip(x, y)) / sum((a - mx) ** 2 for a in x)
+    return float(np.polyfit(np.log([r["dofs"] for r in rows]), np.log([r[key] for r in rows]), 1)[0])
 
 
 def ladder(rows: list[dict], solver: str, ranks: int) -> list[dict]:

@@ -19,6 +19,7 @@ from femcontact.config.presets import PRESETS, apply_preset
 from femcontact.errors import InputError
 from femcontact.config.schema import Field, TableList, parse_assignment, set_key, validate
 from geometry import snap_fit as snap_fit_geometry
+from geometry.mesh_size import MAX_ELEMENTS
 
 EFFECTS = ("friction", "inertia", "large_strain", "gravity", "plane_strain", "plane_stress", "compliant_support",
            "plasticity")
@@ -134,7 +135,7 @@ MESH = {
     "contact_zone": Field("float", 0.0, "half-length of each fine contact zone (mm), independent of "
                           "`resolution`; 0 = automatic (see docs/geometry.md)", min=0.0),
     "degree": Field("int", 1, "Lagrange degree of the displacement", choices=(1, 2)),
-    "max_elements": Field("int", 2_000_000, "largest estimated number of elements a run may mesh: a guard "
+    "max_elements": Field("int", MAX_ELEMENTS, "largest estimated number of elements a run may mesh: a guard "
                           "against a mistyped size; raise it on purpose for a large mesh (3-D wedging at 4.8 million "
                           "estimated elements, 1.03M unknowns: 3.7 GB on one rank with the iterative solver, "
                           "docs/bench.md)", min=1),

@@ -160,6 +160,11 @@ class Problem:
         return held.union(int(dof) for dofs in self.symmetry_dofs.values() for dof in dofs)
 
     @property
+    def dofs(self) -> int:
+        """The displacement unknowns over all ranks."""
+        return self.V.dofmap.index_map.size_global * self.V.dofmap.index_map_bs
+
+    @property
     def body_size(self) -> float:
         """The rigid body's largest dimension (mm): the arm that turns its rotations into lengths."""
         return self.shape["scale"]

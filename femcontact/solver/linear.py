@@ -302,8 +302,7 @@ def linear_solver(problem, options, prefix: str, near_nullspace=None):
     `ITERATIVE_PETSC_OPTIONS` under the scene's own. Direct: `ContactUpdate` where it applies
     (`options.contact_update` on, a state-independent bulk stiffness, a direct solver), else
     `Factorization`."""
-    dofs = problem.V.dofmap.index_map.size_global * problem.V.dofmap.index_map_bs
-    if options.linear == "iterative" or (options.linear == "auto" and dofs >= ITERATIVE_DOFS):
+    if options.linear == "iterative" or (options.linear == "auto" and problem.dofs >= ITERATIVE_DOFS):
         return Factorization(problem, {**ITERATIVE_PETSC_OPTIONS, **options.petsc_options}, prefix, near_nullspace)
     if options.contact_update and problem.forms.jacobian_bulk is not None:
         update = ContactUpdate(problem, options.petsc_options, prefix)

@@ -90,8 +90,7 @@ class Simulation:
 
     @property
     def dofs(self) -> int:
-        V = self.problem.V
-        return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+        return self.problem.dofs
 
     def run(self, first_step: int = 0) -> list[dict]:
         for index, step in enumerate(self.schedule.steps[first_step:], start=first_step):

@@ -76,9 +76,8 @@ def test_state_dependent_bulk_is_factored_every_iteration():
 
 
 def test_iterative_solver_gives_the_direct_direction():
-    options = {**linear.ITERATIVE_PETSC_OPTIONS}
     (du, dr, _), (du_iterative, dr_iterative) = directions("wedging_3d.toml", ["mesh.resolution=0.4"],
-                                                           options=options)
+                                                           options=linear.ITERATIVE_PETSC_OPTIONS)
     assert np.linalg.norm(du_iterative - du) <= 1e-4 * np.linalg.norm(du)
     assert np.linalg.norm(dr_iterative - dr) <= 1e-4 * np.linalg.norm(dr)
 
