@@ -35,11 +35,27 @@ def _box(q, radius, tiny, sides_only=False):
     return ufl.conditional(is_outside, outside, inside) - radius
 
 
+def _to_point(p, a, tiny):
+    """Distance (mm) from the point p to the point a, in a plane, with `tiny` (mm) under the root
+    only so its derivative stays finite where p = a."""
+    return ufl.sqrt((p[0] - a[0]) ** 2 + (p[1] - a[1]) ** 2 + tiny ** 2)
+
+
+def _away(s):
+    """|s| for a signed distance s positive outside, with s's own gradient (the outward
+    normal) on the surface, s = 0."""
+    return ufl.conditional(ufl.ge(s, 0), s, -s)
+
+
 def _to_segment(p, a, b, tiny):
-    """Distance (mm) from the point p to the segment a-b, in a plane (regularised by `tiny`)."""
+    """Distance (mm) from the point p to the segment a-b of an outline traversed counter-clockwise
+    (the solid on its left): beside the segment the distance to its line, whose gradient is the
+    segment's outward normal, also on it; beyond its ends the distance to the nearer end."""
     ex, ez = b[0] - a[0], b[1] - a[1]
-    t = ufl.max_value(ufl.min_value(((p[0] - a[0]) * ex + (p[1] - a[1]) * ez) / (ex * ex + ez * ez), 1.0), 0.0)
-    return ufl.sqrt((p[0] - a[0] - t * ex) ** 2 + (p[1] - a[1] - t * ez) ** 2 + tiny ** 2) - tiny
+    along = ((p[0] - a[0]) * ex + (p[1] - a[1]) * ez) / (ex * ex + ez * ez)
+    outward = ((p[0] - a[0]) * ez - (p[1] - a[1]) * ex) / np.hypot(ex, ez)
+    beyond = ufl.conditional(ufl.le(along, 0.0), _to_point(p, a, tiny), _to_point(p, b, tiny))
+    return ufl.conditional(ufl.And(ufl.gt(along, 0.0), ufl.lt(along, 1.0)), _away(outward), beyond)
 
 
 def _chamfered(rigid, half, across, along, tiny, sides_only):
@@ -125,10 +141,6 @@ def _pin_2d(pieces, pin_length, xi, tiny):
     the distance is the smallest to any piece, negative inside |x| < r(y), 0 < y < length."""
     p = [abs(xi[0]), xi[1]]
     distances, radius = [], None
-
-    def length(v):
-        return ufl.sqrt(v[0] ** 2 + v[1] ** 2 + tiny ** 2) - tiny
-
     for piece in pieces:
         a, b = np.asarray(piece[-2], float), np.asarray(piece[-1], float)
         if piece[0] == "segment":
@@ -140,10 +152,10 @@ def _pin_2d(pieces, pin_length, xi, tiny):
             q = [p[0] - centre[0], p[1] - centre[1]]
             first, last = (a - centre, b - centre) if _cross(a - centre, b - centre) > 0 else (b - centre, a - centre)
             in_wedge = ufl.And(ufl.ge(_cross(first, q), 0), ufl.ge(_cross(q, last), 0))
-            to_arc = ufl.sqrt((ufl.sqrt(q[0] ** 2 + q[1] ** 2) - R) ** 2 + tiny ** 2) - tiny
-            to_ends = ufl.min_value(length([p[0] - a[0], p[1] - a[1]]), length([p[0] - b[0], p[1] - b[1]]))
-            distances.append(ufl.conditional(in_wedge, to_arc, to_ends))
             side = 1.0 if centre[0] < b[0] else -1.0  # convex: the centre is inside the pin
+            to_arc = _away(side * (ufl.sqrt(q[0] ** 2 + q[1] ** 2) - R))  # side * (...): positive outside
+            to_ends = ufl.min_value(_to_point(p, a, tiny), _to_point(p, b, tiny))
+            distances.append(ufl.conditional(in_wedge, to_arc, to_ends))
             r_of_z = centre[0] + side * ufl.sqrt(ufl.max_value(R * R - (xi[1] - centre[1]) ** 2, 0.0))
         if r_of_z is not None and b[1] > a[1]:
             radius = r_of_z if radius is None else ufl.conditional(ufl.le(xi[1], a[1]), radius, r_of_z)

@@ -210,8 +210,12 @@ class SchurNewton:
         p, load = self.problem, self.stabilization_load()
         return float(np.linalg.norm(load[: p.dim]) + np.linalg.norm(load[p.dim:]) / p.body_size)
 
-    def solve(self, load) -> int:
-        """Solve one increment; returns the Newton iterations taken."""
+    def solve(self, load, stiff_start: bool = False) -> int:
+        """Solve one increment; returns the Newton iterations taken. `stiff_start`: fail at once
+        when the first rigid step is held at the trust-region cap, i.e. the rigid body meets
+        no stiffness that stops it within one contact element of where it starts; from there
+        plain Newton can run far along a free direction and settle in another configuration
+        (a 3-D peg rolled about the line through its two contacts and jammed across the hole)."""
         options = self.options
         history = []
         capped = None  # the last rigid step, if it was held at the trust-region cap
@@ -228,6 +232,9 @@ class SchurNewton:
             if iteration == options.max_iterations:
                 break
             du, dr = self.direction(load, R_u, R_r)
+            if stiff_start and iteration == 0 and self._at_cap(dr):
+                raise NewtonFailure("the rigid body has no stiffness that holds it where the increment "
+                                    "starts (its first step reaches the trust-region cap)", history)
             if self._at_cap(dr):
                 if capped is not None and capped @ dr < 0:
                     raise NewtonFailure("the rigid step swings back and forth at the trust-region cap "

@@ -183,7 +183,7 @@ class Simulation:
             if locked_first:
                 ways = [self.locked_first_solve]
             else:
-                ways = [self.newton.solve, self.stabilized_solve]
+                ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
                     ways.append(self.pseudo_transient_solve)
             for k, way in enumerate(ways):
@@ -226,6 +226,12 @@ class Simulation:
         rigid = self.problem.rigid
         rigid.values[~rigid.free] = load.motion[~rigid.free]
         rigid.sync()
+
+    def plain_solve(self, load) -> int:
+        """Newton on the exact equations from the last converged state, unless the rigid body
+        starts without stiffness in a free direction (`SchurNewton.solve`'s `stiff_start`): then
+        the stabilised continuation follows the load from that state instead."""
+        return self.newton.solve(load, stiff_start=True)
 
     def stabilized_solve(self, load) -> int:
         """Continuation in the contact stabilisation down to zero. If the exact equations

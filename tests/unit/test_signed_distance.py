@@ -192,3 +192,50 @@ def test_pictures_lie_on_the_contact_shape(rigid):
     vertices = surface(rigid, points=12)[0]
     assert evaluate(flat, outline_points)[0] == pytest.approx(0.0, abs=1e-12)
     assert evaluate(rigid, vertices)[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def pin(nose: str) -> dict:
+    """A snap-fit pin (geometry.snap_fit): 4 mm wide, 6 mm long, a 1-mm nose at 30 deg."""
+    from geometry.snap_fit import nose_profile
+
+    outline_pieces = nose_profile({"width": 4.0, "length": 6.0, "nose": nose, "nose_angle": 30.0,
+                                   "nose_length": 1.0, "nose_points": []}).pieces
+    return {"shape": "pin", "pieces": outline_pieces, "length": 6.0, "scale": 6.0}
+
+
+CHAMFER_HEIGHT = CHAMFER / math.tan(math.radians(30.0))
+NOSE = math.radians(30.0)
+
+
+@pytest.mark.parametrize("rigid, point, normal", [
+    (chamfered(2), (R - 1.0, -L / 2 + CHAMFER_HEIGHT / 2),
+     np.array([CHAMFER_HEIGHT, -CHAMFER]) / math.hypot(CHAMFER, CHAMFER_HEIGHT)),
+    (pin("taper"), (2.0 - 0.5 * math.tan(NOSE), 0.5), np.array([math.cos(NOSE), -math.sin(NOSE)])),
+    (pin("taper"), (2.0, 3.0), np.array([1.0, 0.0])),
+], ids=["chamfer", "pin nose", "pin shank"])
+def test_the_normal_is_a_unit_vector_up_to_a_face(rigid, point, normal):
+    """On a face of the chamfered peg and of the pin, and at round-off distances either side of
+    it (1e-13 to 1e-10 mm), the distance is exact to the points' round-off and the normal is the face's, a unit vector, to
+    1e-12: a node resting on the face at zero gap carries a force continuous in its position
+    (a distance regularised as sqrt(s^2 + tiny^2) - tiny turns its normal by up to 1 near s = 0)."""
+    offsets = np.array([-1e-10, -1e-13, 0.0, 1e-13, 1e-12, 1e-10])
+    points = [np.asarray(point) + s * normal for s in offsets]
+    distance, gradient = evaluate(rigid, points)
+    assert distance == pytest.approx(offsets, abs=1e-14)  # the points carry round-off of eps * 20 mm
+    assert gradient == pytest.approx(np.tile(normal, (len(offsets), 1)), abs=1e-12)
+
+
+@pytest.mark.parametrize("nose", ["convex", "concave"])
+def test_the_normal_is_a_unit_vector_up_to_a_pin_arc(nose):
+    """The same on the middle of a pin's arc nose: outward from the arc's centre (convex) or
+    towards it (concave). Exactly on the arc (to the round-off of its points, 1e-16 mm) the
+    inside test (the radius r(z)) and the arc's own distance may disagree on the side."""
+    rigid = pin(nose)
+    _, centre, radius, a, b = next(piece for piece in rigid["pieces"] if piece[0] == "arc")
+    direction = (np.add(a, b) / 2 - centre) / np.linalg.norm(np.add(a, b) / 2 - centre)
+    normal = direction if nose == "convex" else -direction
+    offsets = np.array([-1e-10, -1e-13, 1e-13, 1e-10])
+    points = [np.asarray(centre) + radius * direction + s * normal for s in offsets]
+    distance, gradient = evaluate(rigid, points)
+    assert distance == pytest.approx(offsets, abs=1e-14)
+    assert gradient == pytest.approx(np.tile(normal, (len(offsets), 1)), abs=1e-12)

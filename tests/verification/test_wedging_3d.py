@@ -77,3 +77,32 @@ def test_rounded_rim_touches_the_wall_where_placed(rounded):
     _, centre = zone(rounded.step_end_rows()["release"], "B")
     assert placed[2] == pytest.approx(-2.8618, abs=1e-4)
     assert abs(centre[2] - placed[2]) < 0.1
+
+
+def test_a_peg_without_stiffness_where_it_starts_follows_the_load():
+    # placed in two-point contact, the peg touches the block with no force: it has no stiffness,
+    # and a plain Newton step would move it a whole contact element (1 mm here, 20 x the radial
+    # clearance of 0.05 mm), from where Newton can settle in another configuration (on the
+    # 288k-unknown mesh: the peg rolled about the line through its contacts and jammed, 602 N
+    # instead of 15.8 N). The increment starts from the stabilised continuation instead.
+    from femcontact.solver.newton import NewtonFailure
+
+    scene = load_scene(SCENE, ["mesh.resolution=0.5", "steps.0.increments=1", "steps.0.moment=[0, -200, 0]"])
+    simulation = Simulation(scene)
+    load = simulation.schedule.load(0, scene["steps"][0]["duration"], scene["steps"][0]["duration"])
+    start = simulation.problem.state()
+    simulation.problem.begin_increment(load)
+    with pytest.raises(NewtonFailure, match="no stiffness"):
+        simulation.plain_solve(load)
+    simulation.problem.restore(start)
+    simulation.run_step(0, scene["steps"][0])
+    row = simulation.history[-1]
+    assert simulation.stabilized_increments == 1
+    assert row["stabilization_force"] == 0.0  # the exact equations hold at the end
+    # the peg stays in its two-point state: the force of the first fifth of the couple is that of
+    # the finer meshes (15.71-15.82 N from 17k to 288k unknowns, docs/wedging_3d.md) within 5 %
+    # (this 3k-dof mesh puts contact B 0.39 mm above the rim), not a jammed state's
+    force_a, _ = zone(row, "A")
+    force_b, _ = zone(row, "B")
+    assert np.linalg.norm(force_a) == pytest.approx(15.8, rel=0.05)
+    assert np.linalg.norm(force_a + force_b) < 1e-6 * np.linalg.norm(force_a)  # balanced: no other load
