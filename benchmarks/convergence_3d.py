@@ -18,6 +18,7 @@ import math
 import sys
 from pathlib import Path
 
+from femcontact.errors import InputError
 from femcontact.families.repository import SCENES
 from femcontact.io import read_result, write_json_atomic, write_text_atomic
 from femcontact.outputs.tables import markdown_table
@@ -54,6 +55,14 @@ def rung(resolution: float, ranks: int) -> dict:
             **{key: metrics.get(key) for key in QUANTITIES}}
 
 
+def check_ladder(resolutions) -> None:
+    """Refuse three finest resolutions that are not refined by one ratio (Richardson needs it)."""
+    finest = sorted(resolutions)[-3:]
+    if len(finest) == 3 and not math.isclose(finest[2] / finest[1], finest[1] / finest[0], rel_tol=1e-6):
+        raise InputError(f"--resolutions: the three finest ({', '.join(f'{r:g}' for r in finest)}) must be "
+                         "refined by one ratio for Richardson extrapolation")
+
+
 def extrapolation(rows: list[dict]) -> list[dict]:
     """Per quantity: the Richardson limit of the three finest ok rungs, its order and the finest
     rung's estimated error (None without three rungs)."""
@@ -64,6 +73,7 @@ def extrapolation(rows: list[dict]) -> list[dict]:
         if len(finest) < 3 or any(v is None for v in finest):
             continue
         ratio = done[-1]["resolution"] / done[-2]["resolution"]
+        check_ladder([r["resolution"] for r in done])
         limit, order = richardson(finest, ratio)
         converging = math.isfinite(order) and order > 0
         error = abs(finest[-1] - limit) / abs(limit) if converging and limit else None
@@ -103,6 +113,10 @@ def main(argv=None) -> int:
     parser.add_argument("--resolutions", type=float, nargs="+", default=LADDER)
     parser.add_argument("--ranks", type=int, default=2)
     args = parser.parse_args(argv)
+    try:
+        check_ladder(args.resolutions)
+    except InputError as error:
+        parser.error(str(error))
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
     for resolution in sorted(args.resolutions):

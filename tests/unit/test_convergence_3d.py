@@ -45,3 +45,10 @@ def test_a_failed_rung_is_left_out_of_the_extrapolation():
     table = convergence_3d.extrapolation(data)  # the three ok rungs: still f0 exactly
     assert table[0]["limit"] == pytest.approx(70.0, rel=1e-12)
     assert "failed" in convergence_3d.report(data)
+
+
+def test_three_finest_rungs_not_refined_by_one_ratio_are_refused():
+    data = rows()
+    data[-1]["resolution"] = 3.5  # 2 -> 2.83 -> 3.5: ratios 1.41 and 1.24
+    with pytest.raises(convergence_3d.InputError, match="refined by one ratio"):
+        convergence_3d.extrapolation(data)
