@@ -43,17 +43,20 @@ def _to_point(p, a, tiny):
 
 def _away(s):
     """|s| for a signed distance s positive outside, with s's own gradient (the outward
-    normal) on the surface, s = 0."""
-    return ufl.conditional(ufl.ge(s, 0), s, -s)
+    normal) on the surface, s = 0 (UFL's max_value takes its second operand's derivative at a tie)."""
+    return ufl.max_value(-s, s)
 
 
-def _to_segment(p, a, b, tiny):
+def _to_segment(p, a, b, tiny, outward=None):
     """Distance (mm) from the point p to the segment a-b of an outline traversed counter-clockwise
     (the solid on its left): beside the segment the distance to its line, whose gradient is the
-    segment's outward normal, also on it; beyond its ends the distance to the nearer end."""
+    segment's outward normal, also on it; beyond its ends the distance to the nearer end.
+    `outward`: the signed distance to the segment's line (positive outside), where the caller
+    has it (computed here for a segment of numbers)."""
     ex, ez = b[0] - a[0], b[1] - a[1]
     along = ((p[0] - a[0]) * ex + (p[1] - a[1]) * ez) / (ex * ex + ez * ez)
-    outward = ((p[0] - a[0]) * ez - (p[1] - a[1]) * ex) / np.hypot(ex, ez)
+    if outward is None:
+        outward = ((p[0] - a[0]) * ez - (p[1] - a[1]) * ex) / float(np.hypot(ex, ez))
     beyond = ufl.conditional(ufl.le(along, 0.0), _to_point(p, a, tiny), _to_point(p, b, tiny))
     return ufl.conditional(ufl.And(ufl.gt(along, 0.0), ufl.lt(along, 1.0)), _away(outward), beyond)
 
@@ -71,7 +74,8 @@ def _chamfered(rigid, half, across, along, tiny, sides_only):
     slant = np.hypot(width, height)
     lines = {"tip": -along - h, "chamfer": ((across - half + width) * height - (along + h) * width) / slant,
              "side": across - half, "top": along - h}
-    outside_distances = [_to_segment((across, along), a, b, tiny) for a, b in zip(corners[:-1], corners[1:])]
+    outside_distances = [_to_segment((across, along), a, b, tiny, lines[name])
+                         for a, b, name in zip(corners[:-1], corners[1:], ("tip", "chamfer", "side", "top"))]
     is_outside = ufl.gt(lines["tip"], 0)
     for name in ("chamfer", "side", "top"):
         is_outside = ufl.Or(is_outside, ufl.gt(lines[name], 0))

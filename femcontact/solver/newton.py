@@ -212,10 +212,11 @@ class SchurNewton:
 
     def solve(self, load, stiff_start: bool = False) -> int:
         """Solve one increment; returns the Newton iterations taken. `stiff_start`: fail at once
-        when the first rigid step is held at the trust-region cap, i.e. the rigid body meets
-        no stiffness that stops it within one contact element of where it starts; from there
-        plain Newton can run far along a free direction and settle in another configuration
-        (a 3-D peg rolled about the line through its two contacts and jammed across the hole)."""
+        when the rigid body floats where the increment starts (no stiffness in any free
+        direction: no contact active, no support), so that the first step goes to the
+        trust-region cap along the load; from there plain Newton can settle in another
+        configuration (a 3-D peg rolled about the line through its two contacts and jammed
+        across the hole)."""
         options = self.options
         history = []
         capped = None  # the last rigid step, if it was held at the trust-region cap
@@ -232,9 +233,9 @@ class SchurNewton:
             if iteration == options.max_iterations:
                 break
             du, dr = self.direction(load, R_u, R_r)
-            if stiff_start and iteration == 0 and self._at_cap(dr):
-                raise NewtonFailure("the rigid body has no stiffness that holds it where the increment "
-                                    "starts (its first step reaches the trust-region cap)", history)
+            if stiff_start and iteration == 0 and self._floating():
+                raise NewtonFailure("the rigid body has no stiffness where the increment starts "
+                                    "(no contact active)", history)
             if self._at_cap(dr):
                 if capped is not None and capped @ dr < 0:
                     raise NewtonFailure("the rigid step swings back and forth at the trust-region cap "
@@ -360,6 +361,15 @@ class SchurNewton:
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
         cap = p.contact_size
         return dr * min(1.0, cap / length) if length > 0 else dr
+
+    def _floating(self) -> bool:
+        """Whether the last direction's condensed rigid stiffness S is nil in every free
+        direction (below `_rigid_step`'s regularisation floor)."""
+        S_ff = self._factored[2]
+        if not S_ff.size:
+            return False
+        floor = 1e-9 * max(np.abs(np.diag(S_ff)).max(), self.problem.stiffness_scale() * self.problem.body_size)
+        return bool(np.abs(np.linalg.eigvals(S_ff)).max() <= floor)
 
     def _at_cap(self, dr) -> bool:
         """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""

@@ -229,8 +229,8 @@ class Simulation:
 
     def plain_solve(self, load) -> int:
         """Newton on the exact equations from the last converged state, unless the rigid body
-        starts without stiffness in a free direction (`SchurNewton.solve`'s `stiff_start`): then
-        the stabilised continuation follows the load from that state instead."""
+        floats there (`SchurNewton.solve`'s `stiff_start`): then the stabilised continuation
+        follows the load from that state instead."""
         return self.newton.solve(load, stiff_start=True)
 
     def stabilized_solve(self, load) -> int:
