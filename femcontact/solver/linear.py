@@ -36,7 +36,7 @@ ITERATIVE_PETSC_OPTIONS = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "pc_ty
                            "ksp_max_it": 2000}
 ITERATIVE_DOFS = 150_000
 """Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging on 2
-ranks the direct solver ran the whole scene at 109k unknowns in 51 s (122 Newton iterations),
+ranks the direct solver ran the whole scene at 109k unknowns in 43 s (103 Newton iterations),
 but at 288k its first 19 Newton iterations took 13 min: the contact set outgrows the
 update's columns (COLUMN_BYTES) and every iteration factors the whole Jacobian again
 (`make bench_solvers`, `make convergence_3d`)."""
