@@ -47,7 +47,7 @@ def test_a_fault_ends_the_run_at_once_with_the_state_restored(monkeypatch):
     simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.5"]))
     calls = []
 
-    def broken(self, load):
+    def broken(self, load, stiff_start=False):
         calls.append(load.time)
         self.problem.u.x.array[:] = np.nan  # a half-iterated state
         raise ValueError("a bug")
@@ -139,11 +139,11 @@ def test_a_rows_newton_iterations_sum_the_solves_of_the_stabilisation_continuati
     simulation = Simulation(scene)
     real, solves = newton.SchurNewton.solve, []
 
-    def first_fails(self, load):
+    def first_fails(self, load, stiff_start=False):
         if not solves:
             solves.append(None)
             raise newton.NewtonFailure("no convergence in 40 iterations", [1.0])
-        solves.append(real(self, load))
+        solves.append(real(self, load, stiff_start))
         return solves[-1]
 
     monkeypatch.setattr(newton.SchurNewton, "solve", first_fails)

@@ -53,7 +53,7 @@ def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, 
     from femcontact.solver import newton
     from femcontact.solver.stepping import SimulationFailed
 
-    def stalled(self, load):
+    def stalled(self, load, stiff_start=False):
         raise newton.NewtonFailure("no convergence in 40 iterations", [1.0, 0.99])
 
     monkeypatch.setattr(newton.SchurNewton, "solve", stalled)
