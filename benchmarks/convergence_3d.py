@@ -67,13 +67,13 @@ def extrapolation(rows: list[dict]) -> list[dict]:
     """Per quantity: the Richardson limit of the three finest ok rungs, its order and the finest
     rung's estimated error (None without three rungs)."""
     done = [r for r in sorted(rows, key=lambda r: r["resolution"]) if r["status"] == "ok"]
+    check_ladder([r["resolution"] for r in done])
     out = []
     for key, meaning in QUANTITIES.items():
         finest = [r[key] for r in done[-3:]]
         if len(finest) < 3 or any(v is None for v in finest):
             continue
         ratio = done[-1]["resolution"] / done[-2]["resolution"]
-        check_ladder([r["resolution"] for r in done])
         limit, order = richardson(finest, ratio)
         converging = math.isfinite(order) and order > 0
         error = abs(finest[-1] - limit) / abs(limit) if converging and limit else None

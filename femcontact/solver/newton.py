@@ -354,22 +354,24 @@ class SchurNewton:
             return np.linalg.solve(S_ff, rhs)
         p = self.problem
         size = p.body_size
-        scale = max(np.abs(np.diag(S_ff)).max(), p.stiffness_scale() * size)
-        floor = 1e-9 * scale
+        floor = self._stiffness_floor(S_ff)
         lowest = np.linalg.eigvalsh(0.5 * (S_ff + S_ff.T)).min() if shifted else floor
         dr = np.linalg.solve(S_ff + max(floor, floor - lowest) * np.eye(len(rhs)), rhs)
         length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
         cap = p.contact_size
         return dr * min(1.0, cap / length) if length > 0 else dr
 
+    def _stiffness_floor(self, S_ff) -> float:
+        """The stiffness below which S counts as none: 1e-9 of its own scale, or of E * size
+        (E the problem's `stiffness_scale`) for a body without any."""
+        p = self.problem
+        return 1e-9 * max(np.abs(np.diag(S_ff)).max(), p.stiffness_scale() * p.body_size)
+
     def _floating(self) -> bool:
         """Whether the last direction's condensed rigid stiffness S is nil in every free
-        direction (below `_rigid_step`'s regularisation floor)."""
+        direction (below `_stiffness_floor`)."""
         S_ff = self._factored[2]
-        if not S_ff.size:
-            return False
-        floor = 1e-9 * max(np.abs(np.diag(S_ff)).max(), self.problem.stiffness_scale() * self.problem.body_size)
-        return bool(np.abs(np.linalg.eigvals(S_ff)).max() <= floor)
+        return bool(S_ff.size) and bool(np.abs(np.linalg.eigvals(S_ff)).max() <= self._stiffness_floor(S_ff))
 
     def _at_cap(self, dr) -> bool:
         """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""
