@@ -40,10 +40,14 @@ class SolverOptions:
     """Largest stabilisation force kept, relative to the peak load on the rigid body (dimensionless)."""
     pseudo_failures: int = 6
     """Failed pseudo steps after which pseudo-transient continuation gives up."""
-    pseudo_iterations: int = 600
+    pseudo_iterations: int = 1500
     """Newton iterations (failed ones included) after which pseudo-transient continuation gives up."""
     pseudo_softening: float = 4.0
     """Factor by which a converged pseudo step softens the stabilisation spring (a failed one stiffens it)."""
+    pseudo_momentum: float = 0.99
+    """Fraction of the last pseudo step's motion by which the spring's tie runs ahead of the body
+    (dimensionless, below 1): under a steady unbalanced load a pseudo step's travel grows up to
+    1 / (1 - pseudo_momentum) times that of the spring alone."""
 
 
 SCENE_KEYS = tuple(f.name for f in fields(SolverOptions) if f.default is MISSING)

@@ -4,7 +4,8 @@ An increment whose Newton iteration does not converge (`NewtonFailure`: too many
 iterations, a non-finite residual or a failed linear solve) is retried from the last
 converged state, first with the contact stabilisation's continuation, then by
 pseudo-transient continuation (a rigid body that must travel to the contact that holds it),
-then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. A run that still fails raises
+then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. The last
+cut gets one more try (`increment(load, last_try=True)`). A run that still fails raises
 `SimulationFailed` naming the step, the time and the residual history. Any other
 exception is a fault, not non-convergence: it ends the run at once.
 Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
@@ -147,7 +148,7 @@ class Simulation:
                     dt /= 2
                     continue
                 try:
-                    row = self.increment(load, locked_first=True)
+                    row = self.increment(load, last_try=True)
                 except NewtonFailure:
                     raise SimulationFailed(f"step {step['name']!r} at t = {load.time:.6g} s (dt = {dt:.3g} s) "
                                            f"after {cuts} cuts: {error}", index, load) from None
@@ -164,12 +165,12 @@ class Simulation:
                 dt, cuts = min(2 * dt, nominal), cuts - 1
         return True
 
-    def increment(self, load, locked_first: bool = False) -> dict:
+    def increment(self, load, last_try: bool = False) -> dict:
         """Solve one increment from the last converged state (restored on any failure): the
-        plain Newton solve, then the stabilised and the pseudo-transient continuation, or
-        (`locked_first`, the last try of an increment that failed at every cut) every contact
-        stuck first (`locked_first_solve`); returns its output row, computed before the history
-        moves on."""
+        plain Newton solve, then the stabilised and the pseudo-transient continuation (once per
+        step); or (`last_try`, an increment that failed at every cut) pseudo-transient
+        continuation from here, then every contact stuck first (`locked_first_solve`). Returns
+        its output row, computed before the history moves on."""
         from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
@@ -180,8 +181,8 @@ class Simulation:
             self._predict(load)
             self.prescribe(load)
             self.stabilization_force = 0.0
-            if locked_first:
-                ways = [self.locked_first_solve]
+            if last_try:
+                ways = [self.pseudo_transient_solve, self.locked_first_solve]
             else:
                 ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
@@ -260,28 +261,39 @@ class Simulation:
 
     def pseudo_transient_solve(self, load) -> int:
         """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
-        stabilisation spring ties the body to its pose at the start of each pseudo step, so a body
-        without stiffness in some direction (pivoting on one contact node after the other contact
-        opened) travels in bounded steps until it meets what holds it. A converged pseudo step
-        softens the spring `pseudo_softening` times (longer steps), down to the stiffness of the
-        last failed one times `pseudo_softening`; a failed one is retried that much stiffer. When
-        a pseudo step barely loads the spring (`stabilization_tolerance` of the peak load) the
-        body is at rest: the exact equations are solved from there (failing that, the state at
-        rest is kept and its spring force reported, as in `stabilized_solve`). It gives up after
-        `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton iterations (all
-        `SolverOptions`), and then for the rest of the step: halving the load does not shorten
-        the way to rest. The body's travel when it gives up (its pose's change at the last
-        converged pseudo step, mm and rad) is kept by step in `pseudo_travel`: how far the load
-        carried it without finding rest."""
+        stabilisation spring ties the body to a pose near its own at the start of each pseudo
+        step, so a body without stiffness in some direction (pivoting on one contact node after
+        the other contact opened) travels in bounded steps until it meets what holds it.
+
+        - Each converged pseudo step is committed (`Problem.commit`) where the problem does not
+          step in time: friction anchors and plastic strains follow the body along its way, so a
+          contact that slid on the way sticks where the body comes to rest.
+        - The tie runs ahead of the body by `pseudo_momentum` times its last pseudo step (heavy-ball
+          momentum), so a body driven by a steady unbalanced load gathers speed; where the body
+          falls behind its tie (it brakes) or a pseudo step fails, it starts again from rest.
+        - A converged pseudo step softens the spring `pseudo_softening` times, down to the
+          stiffness of the last failed one times `pseudo_softening`; a failed one is retried that
+          much stiffer.
+        - When a pseudo step barely loads the spring (`stabilization_tolerance` of the peak load)
+          the body is at rest: the exact equations are solved from there (failing that, the state
+          at rest is kept and its spring force reported, as in `stabilized_solve`).
+
+        It gives up after `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton
+        iterations (all `SolverOptions`), and then for the rest of the step except the last try
+        of an increment (`increment(last_try=True)`). The body's travel when it gives up (its
+        pose's change at the last converged pseudo step, mm and rad) is kept by step in
+        `pseudo_travel`: how far the load carried it without finding rest."""
         from femcontact.solver.newton import NewtonFailure
 
         p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
         factor, floor, pose = 1.0, 0.0, p.rigid.values.copy()
+        velocity = np.zeros_like(pose)  # the pose's change in the last pseudo step (mm, rad)
         travel = np.zeros_like(pose)  # the pose's change at the last converged pseudo step (mm, rad)
         try:
             while failures < options.pseudo_failures and spent < options.pseudo_iterations:
                 start = p.state()
-                self.newton.stabilize(factor, tie_pose=p.rigid.values)
+                tie = p.rigid.values + options.pseudo_momentum * velocity
+                self.newton.stabilize(factor, tie_pose=tie)
                 try:
                     taken = self.newton.solve(load)
                 except NewtonFailure as failure:
@@ -289,9 +301,11 @@ class Simulation:
                     spent += len(failure.history)
                     failures += 1
                     factor *= options.pseudo_softening
-                    floor = factor
+                    floor, velocity = factor, np.zeros_like(pose)
                     continue
                 iterations, spent = iterations + taken, spent + taken
+                if p.time_stepping is None:
+                    p.commit(load.dt)
                 force = self.newton.stabilization_force()
                 if force <= options.stabilization_tolerance * self.peak_load:
                     rest = p.state()
@@ -304,6 +318,9 @@ class Simulation:
                         self.stabilization_force = force
                     return iterations
                 factor = max(factor / options.pseudo_softening, floor)
+                moved = p.rigid.values - start["r"]
+                braking = (p.rigid.values - tie) @ self.newton.stabilization @ moved <= 0
+                velocity = np.zeros_like(pose) if braking else moved
                 travel = p.rigid.values - pose
         finally:
             self.newton.stabilize(0.0)

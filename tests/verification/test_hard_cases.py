@@ -90,3 +90,36 @@ def test_a_sharp_corner_slides_back_across_the_node_it_dents():
     assert released["contact_A_Fx"] + released["contact_B_Fx"] == pytest.approx(0.0, abs=1e-5)
     assert released["contact_A_Fy"] + released["contact_B_Fy"] == pytest.approx(0.0, abs=1e-5)
     assert abs(released["contact_A_Fx"]) > 1.0  # 153.7 N at this mesh: the peg stays wedged
+
+
+# Pushes down and to the left that turn a leaning peg upright against the left wall, as above, but
+# from leans 5 and 29 times as steep (0.68 and 4.26 deg against 0.15 deg: the stability sweep's
+# cases c564838cddf1 and 2065b4447495 on a coarse mesh). The peg must pivot on the left block's
+# corner by 0.012 and 0.074 rad with nothing resisting the turn but a steady unbalanced moment:
+# pseudo-transient continuation gathers speed along the turn (its momentum), and each pseudo step
+# commits the friction anchors, so the flank that slid onto the wall sticks where the peg comes to
+# rest. Without them both pushes fail after 8 cuts in the first increment that turns the peg
+# (t = 0.0195 and 0.0227 s).
+TURNING_PUSHES = {
+    "c564838cddf1": (["contact.mu=0.7931", "hole.width=40.0608", "peg.insertion_depth=5.351",
+                      "materials.hole.nu=0.2596"], [-0.2886, -0.1026]),
+    "2065b4447495": (["contact.mu=0.6817", "hole.width=40.3733", "peg.insertion_depth=6.512",
+                      "materials.hole.nu=0.2796"], [-0.5869, -0.2048]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(TURNING_PUSHES))
+def test_a_push_turns_the_peg_upright_from_far(case):
+    overrides, push = TURNING_PUSHES[case]
+    scene = load_scene(SCENE, overrides + [f"steps.0.force={push}", "mesh.resolution=0.35"])
+    simulation = Simulation(scene, MPI.COMM_WORLD)
+    tilt = simulation.problem.rigid.tilt()
+    simulation.run_step(0, scene["steps"][0])  # raises SimulationFailed where an increment does not converge
+    row = simulation.history[-1]
+    assert row["stabilization_force"] == 0.0  # the exact equations hold
+    assert abs(np.radians(row["tilt_deg"])) < 1e-3 * tilt  # upright
+    assert row["contact_B_force"] == 0.0  # the right wall lets go
+    # the left wall alone balances the push (solver tolerance 1e-6 N), inside its friction cone
+    assert row["contact_A_Fx"] == pytest.approx(push[0], abs=1e-5)
+    assert row["contact_A_Fy"] == pytest.approx(push[1], abs=1e-5)
+    assert abs(row["contact_A_Fy"]) < -row["contact_A_Fx"] * scene["contact"]["mu"]
