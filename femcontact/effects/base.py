@@ -6,6 +6,9 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
   their values without recompiling forms);
 - `build(problem)`: add terms with `problem.add_bulk`, `add_contact_term`, `add_traction`;
 - `begin_increment(load)` / `commit(dt)`: before an increment / after it converged;
+  `commit_contacts()`: only the contact's history moved to the current state (friction anchors,
+  slip), the material's and the motion's left at the increment's start: what a solver calls along
+  a path that is not the loading path (pseudo-transient continuation);
 - `lock_contacts(on)`: a friction law made to stick everywhere (on) or the scene's again (off),
   True if the effect has one (the solver's last way into an increment);
 - `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
@@ -38,6 +41,9 @@ class Effect:
         pass
 
     def commit(self, dt: float) -> None:
+        pass
+
+    def commit_contacts(self) -> None:
         pass
 
     def lock_contacts(self, on: bool) -> bool:

@@ -106,6 +106,10 @@ class Friction(Effect):
         self.anchor.interpolate(self._local_coordinates())
         self.anchor.x.array[:] += (traction @ R / gamma_t).reshape(-1)
 
+    def commit_contacts(self) -> None:
+        """The anchors moved to the current state (`commit`: they hold no time)."""
+        self.commit(0.0)
+
     def _local_coordinates(self) -> fem.Function:
         """The deformable body's nodes in the rigid body's frame (mm), as a function on V."""
         self._position.x.array[:] = self.problem.local_coordinates().reshape(-1)

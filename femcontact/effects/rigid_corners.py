@@ -300,6 +300,10 @@ class RigidCorners(Effect):
         self.corner_old = self._placed()
         self.u_old = p.u.x.array.copy()
 
+    def commit_contacts(self) -> None:
+        """The corners' slip history moved to the current state (`commit`: it holds no time)."""
+        self.commit(0.0)
+
     def state(self) -> dict:
         return {"tangential_old": self.tangential_old.copy(), "corner_old": self.corner_old.copy(),
                 "u_old": self.u_old.copy()}

@@ -240,6 +240,12 @@ class Problem:
             component.commit(dt)
         self.rigid.commit()
 
+    def commit_contacts(self) -> None:
+        """Move the contact's history (friction anchors, slip) to the current state, the material's
+        and the rigid body's motion left at the increment's start (`Effect.commit_contacts`)."""
+        for component in self.components:
+            component.commit_contacts()
+
     def state(self) -> dict:
         """Copy of everything an increment changes (to retry a cut increment, checkpoints)."""
         state = {"u": self.u.x.array.copy(), "r": self.rigid.values.copy(), "r_old": self.rigid.r_old.value.copy()}

@@ -265,9 +265,11 @@ class Simulation:
         step, so a body without stiffness in some direction (pivoting on one contact node after
         the other contact opened) travels in bounded steps until it meets what holds it.
 
-        - Each converged pseudo step is committed (`Problem.commit`) where the problem does not
-          step in time: friction anchors and plastic strains follow the body along its way, so a
-          contact that slid on the way sticks where the body comes to rest.
+        - Each converged pseudo step commits the contact's history (`Problem.commit_contacts`):
+          friction anchors follow the body along its way, so a contact that slid on the way sticks
+          where the body comes to rest. The material's history (plastic strain) is not committed:
+          the pseudo path is not the loading path, and with momentum it may press a contact
+          harder than the load ever does.
         - The tie runs ahead of the body by `pseudo_momentum` times its last pseudo step (heavy-ball
           momentum), so a body driven by a steady unbalanced load gathers speed; where the body
           falls behind its tie (it brakes) or a pseudo step fails, it starts again from rest.
@@ -304,8 +306,7 @@ class Simulation:
                     floor, velocity = factor, np.zeros_like(pose)
                     continue
                 iterations, spent = iterations + taken, spent + taken
-                if p.time_stepping is None:
-                    p.commit(load.dt)
+                p.commit_contacts()
                 force = self.newton.stabilization_force()
                 if force <= options.stabilization_tolerance * self.peak_load:
                     rest = p.state()
