@@ -169,8 +169,8 @@ class Simulation:
         """Solve one increment from the last converged state (restored on any failure): the
         plain Newton solve, then the stabilised and the pseudo-transient continuation (once per
         step); or (`last_try`, an increment that failed at every cut) pseudo-transient
-        continuation from here, then every contact stuck first (`locked_first_solve`). Returns
-        its output row, computed before the history moves on."""
+        continuation with momentum (`momentum_solve`), then every contact stuck first
+        (`locked_first_solve`). Returns its output row, computed before the history moves on."""
         from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
@@ -182,7 +182,7 @@ class Simulation:
             self.prescribe(load)
             self.stabilization_force = 0.0
             if last_try:
-                ways = [self.pseudo_transient_solve, self.locked_first_solve]
+                ways = [self.momentum_solve, self.locked_first_solve]
             else:
                 ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
@@ -259,7 +259,13 @@ class Simulation:
             self.newton.stabilize(0.0)
         return iterations
 
-    def pseudo_transient_solve(self, load) -> int:
+    def momentum_solve(self, load) -> int:
+        """`pseudo_transient_solve` with the tie running ahead by `pseudo_momentum` (the last try
+        of an increment): faster along a long way to rest, and more sensitive to round-off, which
+        momentum carries along the path (the friction anchors it commits follow that path)."""
+        return self.pseudo_transient_solve(load, self.options.pseudo_momentum)
+
+    def pseudo_transient_solve(self, load, momentum: float = 0.0) -> int:
         """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
         stabilisation spring ties the body to a pose near its own at the start of each pseudo
         step, so a body without stiffness in some direction (pivoting on one contact node after
@@ -270,9 +276,10 @@ class Simulation:
           where the body comes to rest. The material's history (plastic strain) is not committed:
           the pseudo path is not the loading path, and with momentum it may press a contact
           harder than the load ever does.
-        - The tie runs ahead of the body by `pseudo_momentum` times its last pseudo step (heavy-ball
-          momentum), so a body driven by a steady unbalanced load gathers speed; where the body
-          falls behind its tie (it brakes) or a pseudo step fails, it starts again from rest.
+        - The tie runs ahead of the body by `momentum` (dimensionless, below 1) times its last
+          pseudo step (heavy-ball momentum; none by default), so a body driven by a steady
+          unbalanced load gathers speed; where the body falls behind its tie (it brakes) or a
+          pseudo step fails, it starts again from rest.
         - A converged pseudo step softens the spring `pseudo_softening` times, down to the
           stiffness of the last failed one times `pseudo_softening`; a failed one is retried that
           much stiffer.
@@ -294,7 +301,7 @@ class Simulation:
         try:
             while failures < options.pseudo_failures and spent < options.pseudo_iterations:
                 start = p.state()
-                tie = p.rigid.values + options.pseudo_momentum * velocity
+                tie = p.rigid.values + momentum * velocity
                 self.newton.stabilize(factor, tie_pose=tie)
                 try:
                     taken = self.newton.solve(load)
