@@ -46,9 +46,8 @@ class SolverOptions:
     """Factor by which a converged pseudo step softens the stabilisation spring (a failed one stiffens it)."""
     pseudo_momentum: float = 0.99
     """Fraction of the last pseudo step's motion by which the spring's tie runs ahead of the body
-    in the last try of an increment (`Simulation.momentum_solve`; dimensionless, below 1): under a
-    steady unbalanced load a pseudo step's travel grows up to 1 / (1 - pseudo_momentum) times
-    that of the spring alone."""
+    where the linear solves are direct (dimensionless, below 1): under a steady unbalanced load a
+    pseudo step's travel grows up to 1 / (1 - pseudo_momentum) times that of the spring alone."""
 
 
 SCENE_KEYS = tuple(f.name for f in fields(SolverOptions) if f.default is MISSING)

@@ -169,8 +169,8 @@ class Simulation:
         """Solve one increment from the last converged state (restored on any failure): the
         plain Newton solve, then the stabilised and the pseudo-transient continuation (once per
         step); or (`last_try`, an increment that failed at every cut) pseudo-transient
-        continuation with momentum (`momentum_solve`), then every contact stuck first
-        (`locked_first_solve`). Returns its output row, computed before the history moves on."""
+        continuation from here, then every contact stuck first (`locked_first_solve`). Returns
+        its output row, computed before the history moves on."""
         from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
@@ -182,7 +182,7 @@ class Simulation:
             self.prescribe(load)
             self.stabilization_force = 0.0
             if last_try:
-                ways = [self.momentum_solve, self.locked_first_solve]
+                ways = [self.pseudo_transient_solve, self.locked_first_solve]
             else:
                 ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
@@ -259,13 +259,7 @@ class Simulation:
             self.newton.stabilize(0.0)
         return iterations
 
-    def momentum_solve(self, load) -> int:
-        """`pseudo_transient_solve` with the tie running ahead by `pseudo_momentum` (the last try
-        of an increment): faster along a long way to rest, and more sensitive to round-off, which
-        momentum carries along the path (the friction anchors it commits follow that path)."""
-        return self.pseudo_transient_solve(load, self.options.pseudo_momentum)
-
-    def pseudo_transient_solve(self, load, momentum: float = 0.0) -> int:
+    def pseudo_transient_solve(self, load) -> int:
         """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
         stabilisation spring ties the body to a pose near its own at the start of each pseudo
         step, so a body without stiffness in some direction (pivoting on one contact node after
@@ -276,10 +270,13 @@ class Simulation:
           where the body comes to rest. The material's history (plastic strain) is not committed:
           the pseudo path is not the loading path, and with momentum it may press a contact
           harder than the load ever does.
-        - The tie runs ahead of the body by `momentum` (dimensionless, below 1) times its last
-          pseudo step (heavy-ball momentum; none by default), so a body driven by a steady
+        - Where the linear solves are direct, the tie runs ahead of the body by `pseudo_momentum`
+          times its last pseudo step (heavy-ball momentum), so a body driven by a steady
           unbalanced load gathers speed; where the body falls behind its tie (it brakes) or a
-          pseudo step fails, it starts again from rest.
+          pseudo step fails, it starts again from rest. Momentum carries the linear solves'
+          error along the path, and the committed anchors keep it: an iterative solver's (its
+          solves stop at 1e-6 of the right-hand side) would make the rest state depend on the
+          number of ranks, so it goes without.
         - A converged pseudo step softens the spring `pseudo_softening` times, down to the
           stiffness of the last failed one times `pseudo_softening`; a failed one is retried that
           much stiffer.
@@ -295,6 +292,7 @@ class Simulation:
         from femcontact.solver.newton import NewtonFailure
 
         p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
+        momentum = options.pseudo_momentum if self.newton.linear.direct else 0.0
         factor, floor, pose = 1.0, 0.0, p.rigid.values.copy()
         velocity = np.zeros_like(pose)  # the pose's change in the last pseudo step (mm, rad)
         travel = np.zeros_like(pose)  # the pose's change at the last converged pseudo step (mm, rad)
