@@ -141,8 +141,13 @@ DISLODGING = str(SCENES / "dislodging_2d.toml")
     (INSERTION, ["support.stiffness=[1.0, 2.0]"],
      "support.stiffness = [1.0, 2.0]: read only with support.model = 'matrix' (support.model = 'springs')"),
     (DISLODGING, ["steps.2.increments=10000000"], "steps[2].increments = 10000000: 10000215 increments in all"),
+    (DISLODGING, ["dislodging.rotation='spring'"], "dislodging.rotation_stiffness = 0: a gripper spring needs "
+                                                   "rotation = 'spring' and a stiffness > 0 (rotation = 'spring')"),
+    (DISLODGING, ["dislodging.rotation_stiffness=1e5"], "dislodging.rotation_stiffness = 100000: a gripper spring"),
+    (DISLODGING, ["dislodging.rotation='spring'", "dislodging.rotation_stiffness=-1"], "dislodging.rotation_stiffness = -1"),
 ], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
-        "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments"])
+        "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments",
+        "gripper spring without stiffness", "gripper stiffness without the spring", "negative gripper stiffness"])
 def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, scene, assignments, fragment):
     out = tmp_path / "out"
     assert_refused(*cli(capsys, "run", scene, *sets(*assignments), "--out", out), Path(scene).name, fragment)

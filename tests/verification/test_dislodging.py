@@ -287,13 +287,14 @@ def test_a_high_friction_peg_holds_below_and_leaves_above_its_own_pullout():
 def test_a_compliant_fixture_holds_its_peg_up_to_the_friction_it_has():
     """Thesis case 2 (l_d 8, Mz 1500 N*mm) in blocks 65 times more compliant (E = 2969 MPa, the
     thesis' wedging set-up), resolution 0.5. The pulled peg rises by tens of micrometres
-    elastically before a contact slips (44 um at 19.9 N with its rotation held) and is still
+    elastically before a contact slips (47 um at 19.9 N with its rotation held) and is still
     wedged; the pull-outs are the 1-DOF estimates as for stiff blocks: free, the first slip
-    (measured -5.2 %), held, both contacts sliding (+0.3 %); 10 % allowed for the 2.5 deg the
-    compliant wedge tilts, which the 1-DOF model's fixed contact forces do not follow. Taken as
-    the force that lifts the peg by a fixed micrometre the pull-out would be 0.72 N; taken as the
-    first force whose Newton solve from the wedged state fails, 19.92 N held (that solve fails at
-    19.95-20.2, 22 and 24 N, and converges at 20.5, 21 and 23 N with both contacts loaded)."""
+    (measured -5.3 %), held, both contacts sliding (-8.6 %: the held continuation's equilibria end
+    at 24.71 N, where a stiff spring on the rotation follows others to +0.2 %, docs/dislodging.md);
+    10 % allowed for that and the 2.5 deg the compliant wedge tilts, which the 1-DOF model's fixed
+    contact forces do not follow. Taken as the first force whose Newton solve from the wedged state
+    fails, the held pull-out would be 21 N (that solve converges at 19.9 and 20.5 N and fails at
+    21-24 N, where pseudo-transient continuation finds the equilibrium)."""
     from femcontact.families import load_scene
     from femcontact.families.dislodging.pull import Puller
 
@@ -315,15 +316,34 @@ def test_a_pull_that_holds_the_rotation_needs_the_held_pullout(wedged_peg):
     rise = wedged_peg.settings["rise"]
     # a held peg slides out at both contacts with every increment capped at a 1e-3 mm rise: a
     # 0.05 mm event rise (not 0.5) keeps the dislodging pull at ~70 increments
-    wedged_peg.rotation_held, wedged_peg.settings["rise"] = True, 0.05
+    wedged_peg.rotation_mode, wedged_peg.settings["rise"] = "held", 0.05
     try:
         below = wedged_peg.pull(0.98 * held, "continuous")
         above = wedged_peg.pull(1.02 * held, "continuous")
     finally:
-        wedged_peg.rotation_held, wedged_peg.settings["rise"] = False, rise
+        wedged_peg.rotation_mode, wedged_peg.settings["rise"] = "free", rise
     assert not below["dislodged"] and abs(below["rise_at_end_mm"]) < 1e-3
     assert above["dislodged"] and above["event"] == "risen" and above["rotation"] == "held"
     assert wedged_peg.simulation.problem.rigid.modes[2] == "free"  # the hold is undone after the pull
+
+
+def test_a_gripper_spring_lies_between_the_free_and_the_held_pullout(wedged_peg):
+    """`dislodging.rotation = "spring"`: a rotational spring k about the wedged angle. A spring far
+    stiffer than the wedge (1e11 N*mm/rad) gives the held pull-out, one far softer (1e3) the free
+    one, to the bisection's tolerance (0.02 N) and the spring's give (measured at resolution 0.5:
+    18.14 and 5.59 N); 1e7 N*mm/rad lies strictly between (17.20 N); the spring is removed after."""
+    free = wedged_peg.pullout["quasi_static_pullout_N"]
+    held = wedged_peg.pullout["quasi_static_pullout_N_rotation_held"]
+    settings = wedged_peg.settings
+    found = {}
+    for k in (1e3, 1e7, 1e11):
+        settings["rotation_stiffness"] = k
+        found[k] = wedged_peg.quasi_static_pullout("spring")["quasi_static_pullout_N"]
+    settings["rotation_stiffness"] = 0.0
+    assert found[1e3] == pytest.approx(free, abs=0.03)
+    assert found[1e11] == pytest.approx(held, abs=0.03)
+    assert free + 1.0 < found[1e7] < held - 0.3
+    assert not any(c.name == "gripper_spring" for c in wedged_peg.simulation.problem.components)
 
 
 

@@ -43,6 +43,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from femcontact.effects.base import Effect
+
 
 PULL_STEP, OBSERVE_STEP = 2, 3
 PULLOUT_FILE = "pullout.json"  # the quasi-static pull-out, stored beside the wedged state
@@ -180,18 +182,21 @@ class Puller:
         self.tilt = sim.problem.rigid.tilt()
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
-        self.rotation_held = self.settings["rotation"] == "held"
-        self.held_states = {}  # the rigid body's modes -> {pull (N): equilibrium held} (`holds`)
+        self.rotation_mode = self.settings["rotation"]
+        self.restraint = "free"  # the rotation's restraint in force (`rotation`)
+        self.held_states = {}  # the rotation's restraint -> {pull (N): equilibrium held} (`holds`)
         self.plasticity = next((c for c in sim.problem.components if c.name == "plasticity"), None)
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
-        if restart and stored.is_file():
-            self.pullout = json.loads(stored.read_text())
-        else:
-            held = self.quasi_static_pullout(rotation_held=True) if held_pullout or self.rotation_held else {}
-            self.pullout = {**self.quasi_static_pullout(), **{f"{k}_rotation_held": v for k, v in held.items()}}
+        self.pullout = json.loads(stored.read_text()) if restart and stored.is_file() else {}
+        modes = ["free"] + ["held"] * (held_pullout or self.rotation_mode == "held")
+        modes += ["spring"] * (self.rotation_mode == "spring")
+        for mode in modes:  # those the stored wedge (a study's shared prefix) does not have
+            if "quasi_static_pullout_N" + PULLOUT_SUFFIX[mode] not in self.pullout:
+                self.pullout.update({f"{key}{PULLOUT_SUFFIX[mode]}": value
+                                     for key, value in self.quasi_static_pullout(mode).items()})
         self.pullout_time = time.perf_counter() - start
-        self.pullout_force = self.pullout["quasi_static_pullout_N" + ("_rotation_held" if self.rotation_held else "")]
+        self.pullout_force = self.pullout["quasi_static_pullout_N" + PULLOUT_SUFFIX[self.rotation_mode]]
         if checkpoint and sim.problem.mesh.comm.rank == 0:
             from femcontact.io import write_json_atomic
 
@@ -226,14 +231,14 @@ class Puller:
         sim.resume(self.wedged)
         self._set_pull(force, method, frequency)
         start = time.perf_counter()
-        with self.rotation(self.rotation_held):
+        with self.rotation(self.rotation_mode):
             outcome = sim.integrate([PULL_STEP, OBSERVE_STEP], Event(rise=s["rise"]), s["dt_max"], s["dt_min"],
                                     s["max_rise_per_increment"],
                                     settle_period=1 / frequency if method == "pulse" else 0.01)
         wall = time.perf_counter() - start
         start_time = float(sim.schedule.start_times[PULL_STEP])
         row = {"case": s["case"], "method": method, "pulse_hz": frequency if method == "pulse" else "",
-               "rotation": "held" if self.rotation_held else "free", "force_N": float(force),
+               "rotation": self.rotation_mode, "force_N": float(force),
                "dislodged": outcome.event is not None, "dislodge_time_s": "", "impulse_Ns": "",
                "impulse_frames_Ns": "", "event": outcome.event or "",
                "rise_at_end_mm": float(sim.problem.rigid.values[1] - self.wedged["state"]["r"][1]),
@@ -361,7 +366,7 @@ class Puller:
             load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
             return sim.solve(load, stabilize=False)
 
-        held = self.held_states.setdefault(tuple(p.rigid.modes), {})
+        held = self.held_states.setdefault(self.restraint, {})
         try:
             quasi_static_probe(sim, self.wedged, solve_at, force, held)
         except (NewtonFailure, FloatingPointError):
@@ -373,30 +378,63 @@ class Puller:
         return False
 
     @contextmanager
-    def rotation(self, held: bool):
-        """The peg's rotation held at its wedged angle inside the block (a pull that also
-        restrains the rotation, e.g. a gripper), else left as the scene sets it."""
+    def rotation(self, mode: str):
+        """The peg's rotation during a pull: "free" (as the scene sets it), "held" at its wedged
+        angle (a gripper that pulls without letting the peg turn), or restrained by a spring of
+        `rotation_stiffness` about the wedged angle (`GripperSpring`: a gripper's compliance)."""
         sim = self.simulation
-        modes = list(sim.problem.rigid.modes)
-        if held:
-            sim.problem.rigid.modes[2] = "held"
+        p = sim.problem
+        modes, components = list(p.rigid.modes), p.components
+        if mode == "held":
+            p.rigid.modes[2] = "held"
             sim.held = self.wedged["state"]["r"].copy()
+        elif mode == "spring":
+            angle = float(self.wedged["state"]["r"][2])
+            p.components = [*components, GripperSpring(p, self.settings["rotation_stiffness"], angle)]
+        self.restraint = mode
         try:
             yield
         finally:
-            sim.problem.rigid.modes[:] = modes
+            p.rigid.modes[:] = modes
+            p.components = components
             sim.held = None
+            self.restraint = "free"
 
-    def quasi_static_pullout(self, rotation_held: bool = False) -> dict:
+    def quasi_static_pullout(self, rotation: str = "free") -> dict:
         """The largest pull the wedge holds quasi-statically, to `tolerance`, up to 1.5 times the
         1-DOF full-slide force (`largest_held`; no inertia, each force solved from the wedged
         state or from a held equilibrium below it: the same equations, friction anchored at the
-        wedged state).
-        `rotation_held`: the peg's rotation is held at its wedged angle (a pull that also
-        restrains the rotation, for comparison with the 1-DOF full-slide force)."""
-        with self.rotation(rotation_held):
+        wedged state), with the peg's rotation restrained as `rotation` says (see `rotation`;
+        "held" compares with the 1-DOF full-slide force)."""
+        with self.rotation(rotation):
             low, high, _ = largest_held(self.holds, 1.5 * self.one_dof["full_slide"], self.settings["tolerance"])
         return {"quasi_static_pullout_N": low, "pullout_bracket_N": high - low}
+
+
+PULLOUT_SUFFIX = {"free": "", "held": "_rotation_held", "spring": "_rotation_spring"}
+"""The suffix of the pull-out's keys for each restraint of the peg's rotation (`Puller.rotation`)."""
+
+
+class GripperSpring(Effect):
+    """A rotational spring of stiffness k (N*mm/rad) between the peg and a gripper that holds it
+    at the angle phi0 (rad): the moment -k (phi - phi0) on the peg. Added to the problem's
+    components for a pull (`Puller.rotation`), not named in a scene."""
+    name = "gripper_spring"
+
+    def __init__(self, problem, stiffness: float, angle: float):
+        super().__init__(problem)
+        self.stiffness, self.angle = stiffness, angle
+
+    def rigid_residual(self, load) -> np.ndarray:
+        residual = np.zeros(len(self.problem.rigid.names))
+        residual[2] = self.stiffness * (self.problem.rigid.values[2] - self.angle)
+        return residual
+
+    def rigid_stiffness(self, load) -> np.ndarray:
+        n = len(self.problem.rigid.names)
+        stiffness = np.zeros((n, n))
+        stiffness[2, 2] = self.stiffness
+        return stiffness
 
 
 SNAPSHOT_STATES = ("wedged", "before_event")

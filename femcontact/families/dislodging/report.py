@@ -8,7 +8,7 @@ import numpy as np
 
 from femcontact.families.repository import ROOT
 from femcontact.io import read_csv, read_result
-from femcontact.families.dislodging.pull import pull_columns
+from femcontact.families.dislodging.pull import PULLOUT_SUFFIX, pull_columns
 THESIS_THRESHOLDS = {  # (case, method, Hz): (highest force not dislodged, lowest dislodged) in N,
     # from tests/data/dislodging_thesis.csv (thesis ch. 4); None: every sampled force dislodged
     (1, "continuous", 0.0): (None, 20.2), (1, "pulse", 10.0): (20.28, 20.29), (1, "pulse", 20.0): (20.22, 20.23),
@@ -43,7 +43,7 @@ def gather(study) -> tuple[list[dict], list[dict]]:
             pulls += read_csv(case.dir / "pulls.csv", comments=True)
         if "threshold_force_N" in metrics:
             hz = s["pulse_hz"] if s["method"] == "pulse" else 0.0
-            pullout = metrics["quasi_static_pullout_N" + ("_rotation_held" if s["rotation"] == "held" else "")]
+            pullout = metrics["quasi_static_pullout_N" + PULLOUT_SUFFIX[s["rotation"]]]
             thresholds.append({"case": s["case"], "method": s["method"], "pulse_hz": hz if hz else "", "rotation": s["rotation"],
                                "thickness_mm": s["thickness"], "quasi_static_pullout_N": pullout,
                                "quasi_static_pullout_N_rotation_held": metrics.get("quasi_static_pullout_N_rotation_held", ""),

@@ -23,9 +23,12 @@ DISLODGING = {
     "thickness": Field("float", 1.0, "model thickness (mm). The scene is per mm of thickness; with absolute loads a "
                        "thickness t is the 1-mm model with the peg's mass times t (the quasi-static wedge is "
                        "homogeneous of degree 1 in the loads), which is how it is applied", positive=True),
-    "rotation": Field("str", "free", "the peg's rotation during the pull: 'free' (only the pull acts on it) or "
+    "rotation": Field("str", "free", "the peg's rotation during the pull: 'free' (only the pull acts on it), "
                       "'held' at its wedged angle (a pull that also restrains the rotation, as the thesis' "
-                      "thresholds suggest: docs/dislodging.md)", choices=("free", "held")),
+                      "thresholds suggest: docs/dislodging.md) or 'spring': restrained about its wedged angle "
+                      "by a gripper of rotational stiffness `rotation_stiffness`", choices=("free", "held", "spring")),
+    "rotation_stiffness": Field("float", 0.0, "the gripper's rotational stiffness about the peg's wedged angle "
+                                "during the pull (N*mm/rad per mm of thickness), rotation 'spring'", min=0.0),
     "search": Field("bool", True, "bisect for the threshold force"),
     "bracket": Field("floats", [], "initial bracket [low, high] (N) of the threshold; [] = 1 and 1.05 "
                      "times the quasi-static pull-out force (widened until it brackets)"),
@@ -54,6 +57,10 @@ def check_pull(scene: dict) -> None:
     if len(scene["steps"]) not in (2, 4):
         problems.append(f"steps: {len(scene['steps'])} given, expected 4 (wedge, release, pull, observe) "
                         "or 2 (the wedging prefix)")
+    settings = scene["dislodging"]
+    if (settings["rotation"] == "spring") != (settings["rotation_stiffness"] > 0):
+        problems.append(f"dislodging.rotation_stiffness = {settings['rotation_stiffness']:g}: a gripper spring needs "
+                        f"rotation = 'spring' and a stiffness > 0 (rotation = {settings['rotation']!r})")
     bracket = scene["dislodging"]["bracket"]
     if bracket and (len(bracket) != 2 or not 0 <= bracket[0] < bracket[1]):
         problems.append(f"dislodging.bracket = {bracket}: expected [low, high] with 0 <= low < high")
