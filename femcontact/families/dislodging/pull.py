@@ -183,8 +183,7 @@ class Puller:
         self.contacts = wedged_contacts(self.wedged_row, self.tilt)
         self.one_dof = one_dof_thresholds(**self.contacts, tilt=self.tilt, mu=scene["contact"]["mu"])
         self.rotation_mode = self.settings["rotation"]
-        self.restraint = "free"  # the rotation's restraint in force (`rotation`)
-        self.held_states = {}  # the rotation's restraint -> {pull (N): equilibrium held} (`holds`)
+        self.held_states = {}  # `_restraint()` -> {pull (N): equilibrium held} (`holds`)
         self.plasticity = next((c for c in sim.problem.components if c.name == "plasticity"), None)
         stored = Path(restart or "", PULLOUT_FILE)
         start = time.perf_counter()
@@ -366,7 +365,7 @@ class Puller:
             load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
             return sim.solve(load, stabilize=False)
 
-        held = self.held_states.setdefault(self.restraint, {})
+        held = self.held_states.setdefault(self._restraint(), {})
         try:
             quasi_static_probe(sim, self.wedged, solve_at, force, held)
         except (NewtonFailure, FloatingPointError):
@@ -391,14 +390,19 @@ class Puller:
         elif mode == "spring":
             angle = float(self.wedged["state"]["r"][2])
             p.components = [*components, GripperSpring(p, self.settings["rotation_stiffness"], angle)]
-        self.restraint = mode
         try:
             yield
         finally:
             p.rigid.modes[:] = modes
             p.components = components
             sim.held = None
-            self.restraint = "free"
+
+    def _restraint(self) -> tuple:
+        """What restrains the peg now: the rigid body's modes and the gripper spring's stiffness
+        (0 without one). Equilibria held under one restraint are no start for another's probes."""
+        p = self.simulation.problem
+        spring = next((c.stiffness for c in p.components if isinstance(c, GripperSpring)), 0.0)
+        return tuple(p.rigid.modes), spring
 
     def quasi_static_pullout(self, rotation: str = "free") -> dict:
         """The largest pull the wedge holds quasi-statically, to `tolerance`, up to 1.5 times the

@@ -61,7 +61,7 @@ def check_pull(scene: dict) -> None:
     if (settings["rotation"] == "spring") != (settings["rotation_stiffness"] > 0):
         problems.append(f"dislodging.rotation_stiffness = {settings['rotation_stiffness']:g}: a gripper spring needs "
                         f"rotation = 'spring' and a stiffness > 0 (rotation = {settings['rotation']!r})")
-    bracket = scene["dislodging"]["bracket"]
+    bracket = settings["bracket"]
     if bracket and (len(bracket) != 2 or not 0 <= bracket[0] < bracket[1]):
         problems.append(f"dislodging.bracket = {bracket}: expected [low, high] with 0 <= low < high")
     if problems:
