@@ -353,11 +353,10 @@ class SchurNewton:
         if self._time_step() is not None:
             return np.linalg.solve(S_ff, rhs)
         p = self.problem
-        size = p.body_size
         floor = self._stiffness_floor(S_ff)
         lowest = np.linalg.eigvalsh(0.5 * (S_ff + S_ff.T)).min() if shifted else floor
         dr = np.linalg.solve(S_ff + max(floor, floor - lowest) * np.eye(len(rhs)), rhs)
-        length = np.abs(dr * np.where(np.arange(len(dr)) < p.dim, 1.0, size)[: len(dr)]).max()
+        length = np.abs(dr * p.rigid_arms[p.rigid.free]).max()
         cap = p.contact_size
         return dr * min(1.0, cap / length) if length > 0 else dr
 
