@@ -132,8 +132,8 @@ bench_hertz_3d: setup
 bench_solvers: setup
 	$(PY) -m benchmarks.solver_scaling
 
-# The 3-D wedging answers on a ladder of meshes (resolution 1 to 2.83, 2 ranks) with their Richardson
-# extrapolation and discretisation error: results/convergence_3d/convergence_3d.md
+# The 3-D wedging, insertion and snap-fit answers on ladders of meshes (resolution 1 to 2.83 or 4, 2 ranks)
+# with their Richardson extrapolation and discretisation error: results/convergence_3d/convergence_3d.md
 convergence_3d: setup
 	$(PY) -m benchmarks.convergence_3d
 

@@ -1,21 +1,25 @@
-"""`make convergence_3d`: the 3-D wedging answers under mesh refinement, with their
+"""`make convergence_3d`: the 3-D headline answers under mesh refinement, with their
 discretisation error.
 
+Each ladder in LADDERS runs one scene as a whole `mpirun -n 2 femcontact run` process at mesh
+resolutions each sqrt(2) finer than the last (element sizes / sqrt(2), about 2.8x the unknowns):
 scenes/wedging_3d.toml (a rigid peg wedged in a stainless block by a 1000 N mm couple, then
-released) run as a whole `mpirun -n 2 femcontact run` process at mesh resolutions LADDER, each
-sqrt(2) finer than the last (element sizes / sqrt(2), about 2.7x the unknowns). For each answer
-in QUANTITIES: the value on every rung, the Richardson extrapolation of the three finest
-(`femcontact.references.richardson`) with its observed order, and the estimated error of the
-finest rung, |finest - extrapolated| / |extrapolated|, and the spread of the three finest rungs
-(largest - smallest) / finest. A rung whose result.json exists is read,
-not run again (delete results/convergence_3d/r<resolution> to re-run it). Writes
+released), scenes/insertion_3d.toml (a tilted peg with a rounded rim on compliant springs, into
+two-point contact) and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and
+withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
+extrapolation of the three finest (`femcontact.references.richardson`) with its observed order,
+the estimated error of the finest rung, |finest - extrapolated| / |extrapolated|, and the spread
+of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
+not run again (delete results/convergence_3d/LADDER/r<resolution> to re-run it). Writes
 results/convergence_3d/convergence_3d.md and .json after every rung.
 
-    python -m benchmarks.convergence_3d [--resolutions 1 1.4142 2 2.8284] [--ranks 2]
+    python -m benchmarks.convergence_3d [--ladder wedging_3d ...] [--resolutions 1 1.4142 2 2.8284] [--ranks 2]
 """
 import argparse
+import json
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from femcontact.errors import InputError
@@ -27,32 +31,61 @@ from femcontact.references.richardson import richardson
 from benchmarks.whole_process import run_scene
 
 OUT = Path("results/convergence_3d")
-LADDER = (1.0, 2 ** 0.5, 2.0, 2 * 2 ** 0.5)
-"""Mesh resolutions: 17k to about 280k unknowns."""
-QUANTITIES = {
-    "residual_force_A": "contact force at A after release (N)",
-    "load.contact_A_force": "contact force at A under the couple (N)",
-    "tilt_loaded_deg": "tilt under the couple (deg)",
-    "tilt_released_deg": "tilt after release (deg)",
-    "tilt_change_deg": "tilt change under the couple (deg)",
-    "release.contact_B_z": "height of the contact centre B after release (mm)",
-}
-"""result.json metrics reported, with what they are."""
+RESOLUTIONS = (1.0, 2 ** 0.5, 2.0, 2 * 2 ** 0.5)
+"""Mesh resolutions of a ladder unless it names its own."""
 TARGET = 0.01
 """The discretisation error a published 3-D number should carry at most."""
 
 
-def rung(resolution: float, ranks: int) -> dict:
-    """One rung: its result (run, or read when it exists) as a row."""
-    out = (OUT / f"r{resolution:.4f}").resolve()
+@dataclass(frozen=True)
+class Ladder:
+    """One scene refined rung by rung and the result.json metrics reported, with what they are."""
+    scene: str
+    title: str
+    quantities: dict
+    resolutions: tuple = RESOLUTIONS
+
+
+LADDERS = {
+    "wedging_3d": Ladder("wedging_3d.toml", "3-D wedging under mesh refinement", {
+        "residual_force_A": "contact force at A after release (N)",
+        "load.contact_A_force": "contact force at A under the couple (N)",
+        "tilt_loaded_deg": "tilt under the couple (deg)",
+        "tilt_released_deg": "tilt after release (deg)",
+        "tilt_change_deg": "tilt change under the couple (deg)",
+        "release.contact_B_z": "height of the contact centre B after release (mm)",
+    }),
+    "insertion_3d": Ladder("insertion_3d.toml", "3-D insertion under mesh refinement", {
+        "two_point_onset": "two-point onset depth s (mm)",
+        "peak_force": "largest insertion force in the hole (N)",
+        "insert.support_Fz": "insertion force at s = 4.45 mm (N)",
+        "insert.support_Fx": "lateral force at s = 4.45 mm (N)",
+        "insert.contact_A_force": "contact force at A (the mouth) at s = 4.45 mm (N)",
+        "insert.contact_B_force": "contact force at B (the rim) at s = 4.45 mm (N)",
+        "insert.tilt_xz_deg": "tilt at s = 4.45 mm (deg)",
+    }, RESOLUTIONS + (4.0,)),
+    "snap_fit_3d": Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
+        "peak_insertion_force": "peak insertion force (N)",
+        "max_insertion_slope": "insertion force per mm of travel (N/mm)",
+        "peak_withdrawal_force": "peak withdrawal force (N)",
+        "final_contact_force": "contact force on the spring at full insertion (N)",
+        "root_stress": "beam stress at the spring's root (MPa)",
+    }, RESOLUTIONS + (4.0,)),
+}
+
+
+def rung(name: str, resolution: float, ranks: int) -> dict:
+    """One rung of ladder `name`: its result (run, or read when it exists) as a row."""
+    ladder = LADDERS[name]
+    out = (OUT / name / f"r{resolution:.4f}").resolve()
     result = read_result(out)
     if result is None or result["status"] != "ok":
-        result, _ = run_scene(SCENES / "wedging_3d.toml", ranks, out,
+        result, _ = run_scene(SCENES / ladder.scene, ranks, out,
                               {"mesh.resolution": resolution, "mesh.max_elements": 10_000_000})
     metrics = result["metrics"]
     return {"resolution": resolution, "status": result["status"], "dofs": result["info"].get("dofs"),
             "newton_iterations": metrics.get("newton_iterations"), "wall_time": metrics.get("wall_time_s"),
-            **{key: metrics.get(key) for key in QUANTITIES}}
+            **{key: metrics.get(key) for key in ladder.quantities}}
 
 
 def check_ladder(resolutions) -> None:
@@ -63,13 +96,13 @@ def check_ladder(resolutions) -> None:
                          "refined by one ratio for Richardson extrapolation")
 
 
-def extrapolation(rows: list[dict]) -> list[dict]:
-    """Per quantity: the Richardson limit of the three finest ok rungs, its order and the finest
-    rung's estimated error (None without three rungs)."""
+def extrapolation(name: str, rows: list[dict]) -> list[dict]:
+    """Per quantity of ladder `name`: the Richardson limit of the three finest ok rungs, its order
+    and the finest rung's estimated error (None without three rungs)."""
     done = [r for r in sorted(rows, key=lambda r: r["resolution"]) if r["status"] == "ok"]
     check_ladder([r["resolution"] for r in done])
     out = []
-    for key, meaning in QUANTITIES.items():
+    for key, meaning in LADDERS[name].quantities.items():
         finest = [r[key] for r in done[-3:]]
         if len(finest) < 3 or any(v is None for v in finest):
             continue
@@ -83,16 +116,18 @@ def extrapolation(rows: list[dict]) -> list[dict]:
     return out
 
 
-def report(rows: list[dict]) -> str:
-    lines = ["## 3-D wedging under mesh refinement", "",
-             "Wall time: the case's own (`wall_time_s`: meshing, forms, solve, output; process start-up excluded).", "",
-             *markdown_table(["resolution", "unknowns", "status", "Newton iterations", "wall time (s)",
-                              *QUANTITIES],
+def report(name: str, rows: list[dict]) -> str:
+    """The markdown section of ladder `name`: its rungs, then the extrapolation of each quantity."""
+    quantities = LADDERS[name].quantities
+    lines = [f"## {LADDERS[name].title}", "",
+             f"scenes/{LADDERS[name].scene}. Wall time: the case's own (`wall_time_s`: meshing, forms, solve, "
+             "output; process start-up excluded).", "",
+             *markdown_table(["resolution", "unknowns", "status", "Newton iterations", "wall time (s)", *quantities],
                              [[f"{r['resolution']:.4g}", r["dofs"], r["status"], r["newton_iterations"],
                                f"{r['wall_time']:.0f}" if r["wall_time"] is not None else "-",
-                               *(f"{r[k]:.6g}" if r[k] is not None else "-" for k in QUANTITIES)] for r in rows]),
+                               *(f"{r[k]:.6g}" if r[k] is not None else "-" for k in quantities)] for r in rows]),
              ""]
-    table = extrapolation(rows)
+    table = extrapolation(name, rows)
     if table:
         lines += [*markdown_table(["quantity", "finest rung", "extrapolated", "observed order",
                                    "estimated error of the finest", f"<= {TARGET:.0%}", "spread of the three finest"],
@@ -110,24 +145,30 @@ def report(rows: list[dict]) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--resolutions", type=float, nargs="+", default=LADDER)
+    parser.add_argument("--ladder", nargs="+", choices=sorted(LADDERS), default=list(LADDERS),
+                        help="the ladders to run (default: all)")
+    parser.add_argument("--resolutions", type=float, nargs="+", help="override every chosen ladder's rungs")
     parser.add_argument("--ranks", type=int, default=2)
     args = parser.parse_args(argv)
     try:
-        check_ladder(args.resolutions)
+        check_ladder(args.resolutions or ())
     except InputError as error:
         parser.error(str(error))
     OUT.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for resolution in sorted(args.resolutions):
-        print(f"resolution {resolution:.4g} ...", flush=True)
-        rows.append(rung(resolution, args.ranks))
-        row = rows[-1]
-        print(f"  {row['status']}, {row['dofs']} unknowns, {row['newton_iterations']} Newton iterations, "
-              f"tilt change {row['tilt_change_deg']}, R_A {row['residual_force_A']}", flush=True)
-        write_json_atomic(OUT / "convergence_3d.json", rows)
-        write_text_atomic(OUT / "convergence_3d.md", report(rows))
-    print(report(rows))
+    path = OUT / "convergence_3d.json"
+    everything = json.loads(path.read_text()) if path.exists() else {}  # the other ladders' last rows
+    for name in args.ladder:
+        rows = everything[name] = []
+        for resolution in sorted(args.resolutions or LADDERS[name].resolutions):
+            print(f"{name}, resolution {resolution:.4g} ...", flush=True)
+            rows.append(rung(name, resolution, args.ranks))
+            row = rows[-1]
+            print(f"  {row['status']}, {row['dofs']} unknowns, {row['newton_iterations']} Newton iterations, "
+                  + ", ".join(f"{key} {row[key]}" for key in LADDERS[name].quantities), flush=True)
+            write_json_atomic(path, everything)
+            write_text_atomic(OUT / "convergence_3d.md",
+                              "\n".join(report(n, everything[n]) for n in LADDERS if n in everything))
+    print((OUT / "convergence_3d.md").read_text())
     return 0
 
 

@@ -5,50 +5,52 @@ import pytest
 
 from benchmarks import convergence_3d
 
+WEDGING = convergence_3d.LADDERS["wedging_3d"]
+
 
 def rows(f0: float = 70.0, c: float = -5.0, order: float = 2.0) -> list[dict]:
     out = []
-    for resolution in convergence_3d.LADDER:
+    for resolution in WEDGING.resolutions:
         h = 1.0 / resolution
         row = {"resolution": resolution, "status": "ok", "dofs": int(17000 * resolution ** 2.7),
                "newton_iterations": 90, "wall_time": 10.0}
-        row.update({key: f0 + c * h ** order for key in convergence_3d.QUANTITIES})
+        row.update({key: f0 + c * h ** order for key in WEDGING.quantities})
         out.append(row)
     return out
 
 
 def test_richardson_recovers_the_limit_and_the_order():
-    table = convergence_3d.extrapolation(rows())
-    assert len(table) == len(convergence_3d.QUANTITIES)
+    table = convergence_3d.extrapolation("wedging_3d", rows())
+    assert len(table) == len(WEDGING.quantities)
     for entry in table:
         assert entry["limit"] == pytest.approx(70.0, rel=1e-12)
         assert entry["order"] == pytest.approx(2.0, rel=1e-9)
         assert entry["error"] == pytest.approx(5.0 / 8.0 / 70.0, rel=1e-9)  # h_finest^2 = 1/8
         assert entry["spread"] == pytest.approx(5.0 * (1 / 2 - 1 / 8) / 69.375, rel=1e-9)  # h^2 = 1/2 ... 1/8
     assert "| contact force at A after release (N) | 69.375 | 70 | 2.00 | 0.89% | yes | 2.70% |" \
-        in convergence_3d.report(rows())
+        in convergence_3d.report("wedging_3d", rows())
 
 
 def test_rungs_that_oscillate_have_no_order_but_a_spread():
     data = rows()
     for row, value in zip(data, (69.33, 68.12, 68.00, 68.28)):  # measured, docs/wedging_3d.md
         row["residual_force_A"] = value
-    entry = convergence_3d.extrapolation(data)[0]
+    entry = convergence_3d.extrapolation("wedging_3d", data)[0]
     assert entry["error"] is None
     assert entry["spread"] == pytest.approx(0.28 / 68.28, rel=1e-9)
-    assert "| not converging | no | 0.41% |" in convergence_3d.report(data)
+    assert "| not converging | no | 0.41% |" in convergence_3d.report("wedging_3d", data)
 
 
 def test_a_failed_rung_is_left_out_of_the_extrapolation():
     data = rows()
-    data[-1].update(status="failed", **{key: None for key in convergence_3d.QUANTITIES})
-    table = convergence_3d.extrapolation(data)  # the three ok rungs: still f0 exactly
+    data[-1].update(status="failed", **{key: None for key in WEDGING.quantities})
+    table = convergence_3d.extrapolation("wedging_3d", data)  # the three ok rungs: still f0 exactly
     assert table[0]["limit"] == pytest.approx(70.0, rel=1e-12)
-    assert "failed" in convergence_3d.report(data)
+    assert "failed" in convergence_3d.report("wedging_3d", data)
 
 
 def test_three_finest_rungs_not_refined_by_one_ratio_are_refused():
     data = rows()
     data[-1]["resolution"] = 3.5  # 2 -> 2.83 -> 3.5: ratios 1.41 and 1.24
     with pytest.raises(convergence_3d.InputError, match="refined by one ratio"):
-        convergence_3d.extrapolation(data)
+        convergence_3d.extrapolation("wedging_3d", data)
