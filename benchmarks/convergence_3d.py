@@ -5,8 +5,8 @@ Each ladder in LADDERS runs one scene as a whole `mpirun -n 2 femcontact run` pr
 resolutions each sqrt(2) finer than the last (element sizes / sqrt(2), about 2.8x the unknowns):
 scenes/wedging_3d.toml (a rigid peg wedged in a stainless block by a 1000 N mm couple, then
 released), scenes/insertion_3d.toml (a tilted peg with a rounded rim on compliant springs, into
-two-point contact) and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and
-withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
+two-point contact), both also with the contact on the hole's exact surface (`contact.surface =
+"exact"`), and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
 extrapolation of the three finest (`femcontact.references.richardson`) with its observed order,
 the estimated error of the finest rung, |finest - extrapolated| / |extrapolated|, and the spread
 of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
@@ -19,7 +19,7 @@ import argparse
 import json
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from femcontact.errors import InputError
@@ -39,39 +39,49 @@ TARGET = 0.01
 
 @dataclass(frozen=True)
 class Ladder:
-    """One scene refined rung by rung and the result.json metrics reported, with what they are."""
+    """One scene refined rung by rung, with `settings` (key -> TOML value) on every rung, and the
+    result.json metrics reported, with what they are."""
     scene: str
     title: str
     quantities: dict
     resolutions: tuple = RESOLUTIONS
+    settings: dict = field(default_factory=dict)
 
 
-LADDERS = {
-    "wedging_3d": Ladder("wedging_3d.toml", "3-D wedging under mesh refinement", {
-        "residual_force_A": "contact force at A after release (N)",
-        "load.contact_A_force": "contact force at A under the couple (N)",
-        "tilt_loaded_deg": "tilt under the couple (deg)",
-        "tilt_released_deg": "tilt after release (deg)",
-        "tilt_change_deg": "tilt change under the couple (deg)",
-        "release.contact_B_z": "height of the contact centre B after release (mm)",
-    }),
-    "insertion_3d": Ladder("insertion_3d.toml", "3-D insertion under mesh refinement", {
-        "two_point_onset": "two-point onset depth s (mm)",
-        "peak_force": "largest insertion force in the hole (N)",
-        "insert.support_Fz": "insertion force at s = 4.45 mm (N)",
-        "insert.support_Fx": "lateral force at s = 4.45 mm (N)",
-        "insert.contact_A_force": "contact force at A (the mouth) at s = 4.45 mm (N)",
-        "insert.contact_B_force": "contact force at B (the rim) at s = 4.45 mm (N)",
-        "insert.tilt_xz_deg": "tilt at s = 4.45 mm (deg)",
-    }, RESOLUTIONS + (4.0,)),
-    "snap_fit_3d": Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
-        "peak_insertion_force": "peak insertion force (N)",
-        "max_insertion_slope": "insertion force per mm of travel (N/mm)",
-        "peak_withdrawal_force": "peak withdrawal force (N)",
-        "final_contact_force": "contact force on the spring at full insertion (N)",
-        "root_stress": "beam stress at the spring's root (MPa)",
-    }, RESOLUTIONS + (4.0,)),
-}
+EXACT = {"contact.surface": "'exact'"}
+"""The contact measured on the hole's exact round surfaces (docs/wedging_3d.md)."""
+
+
+WEDGING = Ladder("wedging_3d.toml", "3-D wedging under mesh refinement", {
+    "residual_force_A": "contact force at A after release (N)",
+    "load.contact_A_force": "contact force at A under the couple (N)",
+    "tilt_loaded_deg": "tilt under the couple (deg)",
+    "tilt_released_deg": "tilt after release (deg)",
+    "tilt_change_deg": "tilt change under the couple (deg)",
+    "release.contact_B_z": "height of the contact centre B after release (mm)",
+})
+INSERTION = Ladder("insertion_3d.toml", "3-D insertion under mesh refinement", {
+    "peak_force": "largest insertion force in the hole (N)",
+    "insert.support_Fz": "insertion force at s = 4.45 mm (N)",
+    "insert.support_Fx": "lateral force at s = 4.45 mm (N)",
+    "insert.contact_A_force": "contact force at A (the mouth) at s = 4.45 mm (N)",
+    "insert.contact_B_force": "contact force at B (the rim) at s = 4.45 mm (N)",
+    "insert.tilt_xz_deg": "tilt at s = 4.45 mm (deg)",
+})
+SNAP_FIT = Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
+    "peak_insertion_force": "peak insertion force (N)",
+    "max_insertion_slope": "insertion force per mm of travel (N/mm)",
+    "peak_withdrawal_force": "peak withdrawal force (N)",
+    "final_contact_force": "contact force on the spring at full insertion (N)",
+    "root_stress": "beam stress at the spring's root (MPa)",
+})
+LADDERS = {"wedging_3d": WEDGING,
+           "wedging_3d_exact": replace(WEDGING, settings=EXACT,
+                                       title="3-D wedging on the exact hole surface under mesh refinement"),
+           "insertion_3d": INSERTION,
+           "insertion_3d_exact": replace(INSERTION, settings=EXACT,
+                                         title="3-D insertion on the exact hole surface under mesh refinement"),
+           "snap_fit_3d": SNAP_FIT}
 
 
 def rung(name: str, resolution: float, ranks: int) -> dict:
@@ -81,7 +91,7 @@ def rung(name: str, resolution: float, ranks: int) -> dict:
     result = read_result(out)
     if result is None or result["status"] != "ok":
         result, _ = run_scene(SCENES / ladder.scene, ranks, out,
-                              {"mesh.resolution": resolution, "mesh.max_elements": 10_000_000})
+                              {"mesh.resolution": resolution, "mesh.max_elements": 10_000_000, **ladder.settings})
     metrics = result["metrics"]
     return {"resolution": resolution, "status": result["status"], "dofs": result["info"].get("dofs"),
             "newton_iterations": metrics.get("newton_iterations"), "wall_time": metrics.get("wall_time_s"),
@@ -119,8 +129,9 @@ def extrapolation(name: str, rows: list[dict]) -> list[dict]:
 def report(name: str, rows: list[dict]) -> str:
     """The markdown section of ladder `name`: its rungs, then the extrapolation of each quantity."""
     quantities = LADDERS[name].quantities
+    settings = "".join(f" `--set {key}={value}`" for key, value in LADDERS[name].settings.items())
     lines = [f"## {LADDERS[name].title}", "",
-             f"scenes/{LADDERS[name].scene}. Wall time: the case's own (`wall_time_s`: meshing, forms, solve, "
+             f"scenes/{LADDERS[name].scene}{settings}. Wall time: the case's own (`wall_time_s`: meshing, forms, solve, "
              "output; process start-up excluded).", "",
              *markdown_table(["resolution", "unknowns", "status", "Newton iterations", "wall time (s)", *quantities],
                              [[f"{r['resolution']:.4g}", r["dofs"], r["status"], r["newton_iterations"],

@@ -161,3 +161,48 @@ def background(fields: list[int]) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+
+
+def split_contact_corners(dim: int, contact_groups: list[int]) -> int:
+    """Split every cell with two or more facets on the contact surfaces (physical groups of
+    dimension dim - 1) at its centroid, into one cell per facet: each cell then touches the
+    contact with at most one facet, so each contact facet has its own friction anchors at its
+    nodes (effects/friction.py). Linear simplices only; returns the number of cells split."""
+    import gmsh
+    import numpy as np
+
+    mesh, corners = gmsh.model.mesh, dim + 1
+    facets = set()
+    for group in contact_groups:
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(dim - 1, group):
+            for nodes in mesh.getElements(dim - 1, entity)[2]:
+                facets.update(frozenset(f) for f in np.reshape(nodes, (-1, dim)).tolist())
+    split = 0
+    for _, entity in gmsh.model.getEntities(dim):
+        types, tags, nodes = mesh.getElements(dim, entity)
+        (cell_type,) = types
+        cells = np.reshape(nodes[0], (-1, corners))
+        corner = [i for i, cell in enumerate(cells.tolist())
+                  if sum(frozenset(cell[:k] + cell[k + 1:]) in facets for k in range(corners)) >= 2]
+        if not corner:
+            continue
+        node_tags, coords, _ = mesh.getNodes(dim, entity)
+        xyz = {int(t): c for t, c in zip(node_tags, np.reshape(coords, (-1, 3)))}
+        new_nodes, new_coords, new_cells = [], [], []
+        next_node = int(max(mesh.getNodes()[0])) + 1
+        for i in corner:
+            cell = cells[i].tolist()
+            points = np.array([xyz[n] if n in xyz else mesh.getNode(n)[0] for n in cell])
+            new_nodes.append(next_node)
+            new_coords += points.mean(axis=0).tolist()
+            for k in range(corners):  # the cell with its k-th facet and the centroid, oriented as the cell
+                new_cells.append(cell[:k] + [next_node] + cell[k + 1:])
+            next_node += 1
+        keep = np.delete(cells, corner, axis=0)
+        cells_out = np.vstack([keep, np.array(new_cells)])
+        first = int(max(max(tags) for tags in mesh.getElements()[1])) + 1
+        mesh.clear([(dim, entity)])
+        mesh.addNodes(dim, entity, list(node_tags) + new_nodes, list(coords) + new_coords)
+        mesh.addElementsByType(entity, cell_type, list(range(first, first + len(cells_out))), cells_out.reshape(-1).tolist())
+        split += len(corner)
+    return split

@@ -17,7 +17,9 @@ class Model:
     rigid: analytic description of the rigid body (docs/geometry.md); points: named global
     points (mm); contact_facets: facet tags that may touch the rigid body; supports: facet
     tags to fix; h_contact: element size in the contact zones (mm); symmetry: facet tag name
-    -> the displacement component (0: x, 1: y) held on that symmetry plane."""
+    -> the displacement component (0: x, 1: y) held on that symmetry plane; revolution: the
+    contact facet tags that mesh a surface of revolution ("facets") and its axis (a "point" on it
+    and its unit "direction"), empty where there is none (`contact.surface = "exact"`)."""
     mesh: object
     cell_tags: object
     facet_tags: object
@@ -29,6 +31,7 @@ class Model:
     supports: list
     h_contact: float
     symmetry: dict = field(default_factory=dict)
+    revolution: dict = field(default_factory=dict)
 
 
 def builder(scene: dict):
@@ -126,6 +129,7 @@ def build(scene: dict, comm, msh_path=None) -> Model:
         try:
             gmsh_tools.start(scene.get("name", "scene"))
             names = module.generate(scene, sizes)
+            gmsh_tools.split_contact_corners(scene["dim"], [names["facets"][n] for n in names["contact_facets"]])
             if msh_path is not None:
                 gmsh.write(str(msh_path))
         except Exception as exc:  # re-raised on every rank below, so no rank waits forever
@@ -142,7 +146,8 @@ def build(scene: dict, comm, msh_path=None) -> Model:
     return Model(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, facets=names["facets"],
                  cells=names["cells"], rigid=rigid_body(scene), points=points(scene),
                  contact_facets=names["contact_facets"], supports=names["supports"],
-                 h_contact=sizes.h_contact, symmetry=names.get("symmetry", {}))
+                 h_contact=sizes.h_contact, symmetry=names.get("symmetry", {}),
+                 revolution=names.get("revolution", {}))
 
 
 def write(model: Model, path) -> None:

@@ -97,10 +97,13 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
         volume, faces = _hole_block(scene)
         cell, supports = "block", ["support"]
         contact = ["hole_wall", "hole_mouth", "hole_chamfer"]
+        round_faces = [n for n in ("hole_wall", "hole_chamfer") if faces[n]]
+        revolution = {"facets": round_faces, "point": [0.0, 0.0, 0.0], "direction": [0.0, 0.0, 1.0]}
     else:
         volume, faces = _peg(scene)
         cell, supports = "peg", ["peg_top"]  # held by the gripper
         contact = ["peg_side", "peg_tip", "peg_chamfer"]
+        revolution = {}
     points = peg_pose(scene).points
     gmsh_tools.background([gmsh_tools.ball_size(sz, points[name], sz.zone) for name in ("contact_A", "contact_B")])
     cells = gmsh_tools.add_groups(3, {cell: [volume]})
@@ -108,4 +111,4 @@ def generate(scene: dict, sz: gmsh_tools.Sizes) -> dict:
     gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.45)  # optimise tetrahedra of quality below this
     gmsh.model.mesh.generate(3)
     return {"facets": facets, "cells": cells, "contact_facets": [n for n in contact if n in facets],
-            "supports": supports}
+            "supports": supports, "revolution": revolution}

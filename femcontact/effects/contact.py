@@ -4,13 +4,52 @@ Nitsche's method (default): pressure p = [p_sigma - gamma_N g]_+ with gamma_N = 
 or penalty p = [-gamma_N g]_+, against the rigid body's analytic signed distance g in
 its own frame. Provides `problem.contact` (xi, gap, normal, normal_local, pressure) for
 friction and outputs, and the normal traction p n.
+
+With `contact.surface = "exact"` the contact points of the facets that mesh a surface of
+revolution (a round hole's wall and chamfer, a meshed peg's side) are moved radially onto that
+surface before the gap is measured (`exact_surface_point`): the flat facets' chords, which lie
+inside the hole by up to h^2/(8R), no longer touch the peg, and the contact can be integrated
+at more points than the facets' vertices.
 """
 from types import SimpleNamespace
 
+import numpy as np
 import ufl
+from dolfinx import fem
+from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
 from femcontact.physics.signed_distance import signed_distance
+
+
+def exact_surface_point(problem):
+    """The reference position x (mm, UFL) of the contact points, moved radially onto the exact
+    surface of revolution (`Model.revolution`): x + w (r_h / r - 1) x_r, with x_r the part of
+    x - point across the axis, r = |x_r|, r_h the mesh nodes' r interpolated linearly (so the
+    exact radius of a cylinder, and of a cone at the point's height) and w 1 at the nodes of
+    those facets, 0 at all others (a flat facet beside them keeps its points to within h^2 / 8R)."""
+    model, x = problem.model, ufl.SpatialCoordinate(problem.mesh)
+    point, direction = np.asarray(model.revolution["point"]), np.asarray(model.revolution["direction"])
+    Q = fem.FunctionSpace(problem.mesh, ("CG", 1))
+
+    def radius(X):
+        d = X[: problem.dim].T - point
+        return np.linalg.norm(d - np.outer(d @ direction, direction), axis=1)
+
+    r_h, w = fem.Function(Q), fem.Function(Q)
+    r_h.interpolate(radius)
+    fdim = problem.mesh.topology.dim - 1
+    for name in model.revolution["facets"]:
+        dofs = fem.locate_dofs_topological(Q, fdim, model.facet_tags.find(model.facets[name]))
+        w.x.array[dofs] = 1.0
+    w.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)  # a node any rank marked
+    w.x.array[:] = np.minimum(w.x.array, 1.0)
+    w.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    p0, a = ufl.as_vector(point.tolist()), ufl.as_vector(direction.tolist())
+    radial = (x - p0) - ufl.dot(x - p0, a) * a
+    r = ufl.sqrt(ufl.dot(radial, radial))
+    tiny = 1e-12 * problem.extent  # on the axis (a meshed peg's tip) there is nothing to move
+    return x + ufl.conditional(ufl.gt(r, tiny), w * (r_h / ufl.max_value(r, tiny) - 1), 0.0) * radial
 
 
 class NormalContact(Effect):
@@ -22,7 +61,8 @@ class NormalContact(Effect):
 
     def build(self, problem) -> None:
         c, rigid, scene = problem.constants, problem.rigid, problem.scene
-        x = ufl.SpatialCoordinate(problem.mesh) + problem.u
+        exact = scene["contact"]["surface"] == "exact"
+        x = (exact_surface_point(problem) if exact else ufl.SpatialCoordinate(problem.mesh)) + problem.u
         xi = ufl.variable(rigid.to_local(x, rigid.variable))
         gap = signed_distance(problem.shape, xi)
         normal_local = ufl.diff(gap, xi)

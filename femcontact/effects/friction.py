@@ -14,7 +14,8 @@ the next increment to start exactly where the last one converged. With the conta
 that integrate at the nodes (2-D, and 3-D P1) this holds to round-off, except at a node
 shared by two contact facets of one element, where the anchor holds their average. The field
 lives on every element (DOLFINx 0.5 has no function space on facets): d numbers per node of
-each element, in 3-D P1 about 24 per mesh vertex.
+each element, in 3-D P1 about 24 per mesh vertex. On exact surfaces (`contact.surface`) the
+contact points include the edge midpoints: the anchors are quadratic there, one per point.
 """
 import numpy as np
 import ufl
@@ -41,9 +42,13 @@ class Friction(Effect):
     def build(self, problem) -> None:
         c, rigid, contact = problem.constants, problem.rigid, problem.contact
         degree = problem.scene["mesh"]["degree"]
-        self.W = fem.VectorFunctionSpace(problem.mesh, ("DG", degree))
+        exact = problem.scene["contact"]["surface"] == "exact"  # contact points on edge midpoints too
+        self.W = fem.VectorFunctionSpace(problem.mesh, ("DG", degree + 1 if exact else degree))
         self.anchor = fem.Function(self.W, name="anchor")
-        self._position = fem.Function(problem.V)  # the nodes' local coordinates, to interpolate on W
+        if exact:  # the points where the contact is measured, moved onto the exact surface
+            self._position = fem.Expression(contact.xi, self.W.element.interpolation_points())
+        else:  # the nodes' local coordinates, to interpolate on W
+            self._position = fem.Function(problem.V)
         self.anchor.interpolate(self._local_coordinates())  # every node starts stuck
         slip_local = contact.xi - self.anchor
         slip_local = slip_local - ufl.dot(slip_local, contact.normal_local) * contact.normal_local
@@ -110,9 +115,11 @@ class Friction(Effect):
         """The anchors moved to the current state (`commit`: they hold no time)."""
         self.commit(0.0)
 
-    def _local_coordinates(self) -> fem.Function:
-        """The deformable body's nodes in the rigid body's frame (mm), as a function on V."""
-        self._position.x.array[:] = self.problem.local_coordinates().reshape(-1)
+    def _local_coordinates(self):
+        """The contact points in the rigid body's frame (mm): the deformable body's nodes as a
+        function on V, or on exact surfaces the expression of the contact's xi."""
+        if isinstance(self._position, fem.Function):
+            self._position.x.array[:] = self.problem.local_coordinates().reshape(-1)
         return self._position
 
     def _projected_traction(self, force_vector) -> np.ndarray:

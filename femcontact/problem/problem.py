@@ -23,6 +23,10 @@ from femcontact.errors import InputError
 from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
+EXACT_SURFACE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
+                      "quadrature_weights": [1 / 24] * 3 + [1 / 8] * 3}
+"""Contact points on a reference triangle (area 1/2) for exact surfaces: the vertex rule on the four
+triangles that halve its edges, so the points are the nodes of a quadratic triangle."""
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 
 
@@ -114,9 +118,13 @@ class Problem:
         In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact: a
         penetrating corner node is seen at once); basix has no such rule on triangles, so
         3-D P1 uses the facet's vertices as a custom rule (the nodes also lie on the exact
-        curved surface, the facets' interior does not) and 3-D P2 Gauss points of degree 2p + 2."""
+        curved surface, the facets' interior does not) and 3-D P2 Gauss points of degree 2p + 2.
+        On exact surfaces (`contact.surface = "exact"`, 3-D P1) the points are the vertices and
+        edge midpoints, each facet's vertex rule on its four halved triangles (`EXACT_SURFACE_RULE`)."""
         if self.dim == 2:
             quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
+        elif self.scene["contact"]["surface"] == "exact":
+            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **EXACT_SURFACE_RULE}
         elif degree == 1:
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1,
                           "quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],

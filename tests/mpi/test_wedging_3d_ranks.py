@@ -1,7 +1,8 @@
 """The 3-D wedging does not depend on the number of MPI ranks (run under mpirun -n 2):
 scenes/wedging_3d.toml on a coarse mesh (resolution 0.35), couple and release, on both ranks
 against each rank alone on MPI.COMM_SELF: with the peg's rims rounded (`peg.corner_radius` =
-1 mm), and with the iterative linear solver (its multigrid aggregates differ between the
+1 mm), with the contact on the hole's exact surface (`contact.surface`: its nodes marked on
+each rank), and with the iterative linear solver (its multigrid aggregates differ between the
 partitions; each solve stops at 1e-6 of its right-hand side, each run at Newton's tolerance)."""
 from pathlib import Path
 
@@ -22,7 +23,8 @@ def run(comm, overrides) -> dict:
 
 
 @pytest.mark.skipif(MPI.COMM_WORLD.size != 2, reason="run with mpirun -n 2")
-@pytest.mark.parametrize("overrides", [("peg.corner_radius=1.0",), ("solver.linear='iterative'",)])
+@pytest.mark.parametrize("overrides", [("peg.corner_radius=1.0",), ("contact.surface='exact'",),
+                                       ("solver.linear='iterative'",)])
 def test_two_ranks_match_one_rank(overrides):
     parallel, serial = run(MPI.COMM_WORLD, overrides), run(MPI.COMM_SELF, overrides)
     assert serial["release"]["contact_B_force"] > 25.0  # wedged: more than the couple's force 1000/40 N

@@ -145,9 +145,13 @@ DISLODGING = str(SCENES / "dislodging_2d.toml")
                                                    "rotation = 'spring' and a stiffness > 0 (rotation = 'spring')"),
     (DISLODGING, ["dislodging.rotation_stiffness=1e5"], "dislodging.rotation_stiffness = 100000: a gripper spring"),
     (DISLODGING, ["dislodging.rotation='spring'", "dislodging.rotation_stiffness=-1"], "dislodging.rotation_stiffness = -1"),
+    (INSERTION, ["contact.surface='exact'"], "contact.surface = 'exact': for the round hole of a 3-D peg_in_hole "
+                                             "scene with a rigid peg on P1 elements (dim = 2"),
+    (INSERTION, ["contact.surface='round'"], "contact.surface = 'round'"),
 ], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
         "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments",
-        "gripper spring without stiffness", "gripper stiffness without the spring", "negative gripper stiffness"])
+        "gripper spring without stiffness", "gripper stiffness without the spring", "negative gripper stiffness",
+        "exact surface in 2-D", "unknown contact surface"])
 def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, scene, assignments, fragment):
     out = tmp_path / "out"
     assert_refused(*cli(capsys, "run", scene, *sets(*assignments), "--out", out), Path(scene).name, fragment)
