@@ -129,7 +129,6 @@ def build(scene: dict, comm, msh_path=None) -> Model:
         try:
             gmsh_tools.start(scene.get("name", "scene"))
             names = module.generate(scene, sizes)
-            gmsh_tools.split_contact_corners(scene["dim"], [names["facets"][n] for n in names["contact_facets"]])
             if msh_path is not None:
                 gmsh.write(str(msh_path))
         except Exception as exc:  # re-raised on every rank below, so no rank waits forever
