@@ -150,8 +150,8 @@ CONTACT = {
     "theta": Field("float", 0.0, "Nitsche variant: 1 symmetric, 0 skew-less, -1 skew-symmetric",
                    choices=(-1.0, 0.0, 1.0)),
     "surface": Field("str", "facets", "where the contact is measured in 3-D P1: 'facets' (the mesh's flat "
-                     "facets, at their vertices) or 'exact' (a round hole's wall and chamfer, or a meshed peg's "
-                     "side, moved onto the exact surface, at the facets' vertices and edge midpoints)",
+                     "facets, at their vertices) or 'exact' (a round hole's wall and chamfer facets moved onto the "
+                     "exact cylinder and cone, at the facets' vertices and edge midpoints; docs/wedging_3d.md)",
                      choices=("facets", "exact")),
 }
 
