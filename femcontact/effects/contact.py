@@ -6,8 +6,8 @@ its own frame. Provides `problem.contact` (xi, gap, normal, normal_local, pressu
 friction and outputs, and the normal traction p n.
 
 With `contact.surface = "exact"` the contact points of the facets that mesh a surface of
-revolution (a round hole's wall and chamfer, a meshed peg's side) are moved radially onto that
-surface before the gap is measured (`exact_surface_point`): the flat facets' chords, which lie
+revolution (a round hole's wall and chamfer) are moved radially onto that surface before the
+gap is measured (`exact_surface_point`): the flat facets' chords, which lie
 inside the hole by up to h^2/(8R), no longer touch the peg, and the contact can be integrated
 at more points than the facets' vertices.
 """
@@ -47,9 +47,8 @@ def exact_surface_point(problem):
     w.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
     p0, a = ufl.as_vector(point.tolist()), ufl.as_vector(direction.tolist())
     radial = (x - p0) - ufl.dot(x - p0, a) * a
-    r = ufl.sqrt(ufl.dot(radial, radial))
-    tiny = 1e-12 * problem.extent  # on the axis (a meshed peg's tip) there is nothing to move
-    return x + ufl.conditional(ufl.gt(r, tiny), w * (r_h / ufl.max_value(r, tiny) - 1), 0.0) * radial
+    r = ufl.sqrt(ufl.dot(radial, radial))  # > 0: the hole block has no point on its axis
+    return x + w * (r_h / r - 1) * radial
 
 
 class NormalContact(Effect):
