@@ -54,3 +54,9 @@ def test_three_finest_rungs_not_refined_by_one_ratio_are_refused():
     data[-1]["resolution"] = 3.5  # 2 -> 2.83 -> 3.5: ratios 1.41 and 1.24
     with pytest.raises(convergence_3d.InputError, match="refined by one ratio"):
         convergence_3d.extrapolation("wedging_3d", data)
+
+
+def test_an_order_above_the_discretisations_gives_no_error_estimate():
+    table = convergence_3d.extrapolation("wedging_3d", rows(order=3.0))  # P1 contact delivers 2 at most
+    assert all(entry["error"] is None for entry in table)
+    assert "| order above 2 | no |" in convergence_3d.report("wedging_3d", rows(order=3.0))
