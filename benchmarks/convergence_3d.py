@@ -112,29 +112,32 @@ def check_ladder(resolutions) -> None:
 def extrapolation(name: str, rows: list[dict]) -> list[dict]:
     """Per quantity of ladder `name`: the Richardson limit of the three finest ok rungs, its order
     and the finest rung's estimated error (None without three rungs)."""
+    ladder = LADDERS[name]
     done = [r for r in sorted(rows, key=lambda r: r["resolution"]) if r["status"] == "ok"]
     check_ladder([r["resolution"] for r in done])
     out = []
-    for key, meaning in LADDERS[name].quantities.items():
+    for key, meaning in ladder.quantities.items():
         finest = [r[key] for r in done[-3:]]
         if len(finest) < 3 or any(v is None for v in finest):
             continue
         ratio = done[-1]["resolution"] / done[-2]["resolution"]
         limit, order = richardson(finest, ratio)
-        converging = math.isfinite(order) and 0 < order <= LADDERS[name].order_limit
+        converging = math.isfinite(order) and 0 < order <= ladder.order_limit
         error = abs(finest[-1] - limit) / abs(limit) if converging and limit else None
         spread = (max(finest) - min(finest)) / abs(finest[-1]) if finest[-1] else None
+        why_none = f"order above {ladder.order_limit:g}" if order > ladder.order_limit else "not converging"
         out.append({"quantity": key, "meaning": meaning, "finest": finest[-1], "limit": limit, "order": order,
-                    "error": error, "spread": spread})
+                    "error": error, "why_none": why_none, "spread": spread})
     return out
 
 
 def report(name: str, rows: list[dict]) -> str:
     """The markdown section of ladder `name`: its rungs, then the extrapolation of each quantity."""
-    quantities = LADDERS[name].quantities
-    settings = "".join(f" `--set {key}={value}`" for key, value in LADDERS[name].settings.items())
-    lines = [f"## {LADDERS[name].title}", "",
-             f"scenes/{LADDERS[name].scene}{settings}. Wall time: the case's own (`wall_time_s`: meshing, forms, solve, "
+    ladder = LADDERS[name]
+    quantities = ladder.quantities
+    settings = "".join(f" `--set {key}={value}`" for key, value in ladder.settings.items())
+    lines = [f"## {ladder.title}", "",
+             f"scenes/{ladder.scene}{settings}. Wall time: the case's own (`wall_time_s`: meshing, forms, solve, "
              "output; process start-up excluded).", "",
              *markdown_table(["resolution", "unknowns", "status", "Newton iterations", "wall time (s)", *quantities],
                              [[f"{r['resolution']:.4g}", r["dofs"], r["status"], r["newton_iterations"],
@@ -146,16 +149,14 @@ def report(name: str, rows: list[dict]) -> str:
         lines += [*markdown_table(["quantity", "finest rung", "extrapolated", "observed order",
                                    "estimated error of the finest", f"<= {TARGET:.0%}", "spread of the three finest"],
                                   [[t["meaning"], f"{t['finest']:.6g}", f"{t['limit']:.6g}", f"{t['order']:.2f}",
-                                    f"{t['error']:.2%}" if t["error"] is not None else
-                                    f"order above {LADDERS[name].order_limit:g}" if t["order"] > LADDERS[name].order_limit
-                                    else "not converging",
+                                    f"{t['error']:.2%}" if t["error"] is not None else t["why_none"],
                                     "yes" if t["error"] is not None and t["error"] <= TARGET else "no",
                                     f"{t['spread']:.2%}" if t["spread"] is not None else "-"]
                                    for t in table]),
                   "",
                   "Spread: (largest - smallest) / finest over the three finest rungs; where they do not "
                   "converge monotonically (no positive observed order), or line up at an order above the "
-                  f"discretisation's ({LADDERS[name].order_limit:g}), it is what the mesh still moves the answer "
+                  f"discretisation's ({ladder.order_limit:g}), it is what the mesh still moves the answer "
                   "by, not an error bound.", ""]
     return "\n".join(lines)
 

@@ -16,7 +16,6 @@ from types import SimpleNamespace
 import numpy as np
 import ufl
 from dolfinx import fem
-from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
 from femcontact.physics.signed_distance import signed_distance
@@ -39,12 +38,8 @@ def exact_surface_point(problem):
     r_h, w = fem.Function(Q), fem.Function(Q)
     r_h.interpolate(radius)
     fdim = problem.mesh.topology.dim - 1
-    for name in model.revolution["facets"]:
-        dofs = fem.locate_dofs_topological(Q, fdim, model.facet_tags.find(model.facets[name]))
-        w.x.array[dofs] = 1.0
-    w.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)  # a node any rank marked
-    w.x.array[:] = np.minimum(w.x.array, 1.0)
-    w.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    for name in model.revolution["facets"]:  # with the nodes other ranks' facets hold (remote dofs)
+        w.x.array[fem.locate_dofs_topological(Q, fdim, model.facet_tags.find(model.facets[name]))] = 1.0
     p0, a = ufl.as_vector(point.tolist()), ufl.as_vector(direction.tolist())
     radial = (x - p0) - ufl.dot(x - p0, a) * a
     r = ufl.sqrt(ufl.dot(radial, radial))  # > 0: the hole block has no point on its axis
