@@ -11,6 +11,9 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
   a path that is not the loading path (pseudo-transient continuation);
 - `lock_contacts(on)`: a friction law made to stick everywhere (on) or the scene's again (off),
   True if the effect has one (the solver's last way into an increment);
+- `path_dependent()`: whether several equilibria may hold an increment's load, so that the
+  answer depends on the path the solver takes to it (Coulomb friction: its equations have no
+  potential);
 - `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
 - `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
 - `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
@@ -47,6 +50,9 @@ class Effect:
         pass
 
     def lock_contacts(self, on: bool) -> bool:
+        return False
+
+    def path_dependent(self) -> bool:
         return False
 
     def state(self) -> dict:

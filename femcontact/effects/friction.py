@@ -39,6 +39,10 @@ class Friction(Effect):
         contact = scene["contact"]
         return {"mu": contact["mu"], "gamma_t": contact["gamma_t"] or contact["gamma"]}
 
+    def path_dependent(self) -> bool:
+        """Whether friction acts (mu > 0): then several stick-slip states may hold one load."""
+        return float(self.problem.constants["mu"].value) > 0
+
     def build(self, problem) -> None:
         c, rigid, contact = problem.constants, problem.rigid, problem.contact
         degree = problem.scene["mesh"]["degree"]

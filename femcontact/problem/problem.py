@@ -242,6 +242,11 @@ class Problem:
         False if no effect has a friction law to change."""
         return any([component.lock_contacts(on) for component in self.components])
 
+    def path_dependent(self) -> bool:
+        """Whether several equilibria may hold one load, so that an increment's answer depends on
+        the solver's path to it (`Effect.path_dependent`: friction)."""
+        return any(component.path_dependent() for component in self.components)
+
     def commit(self, dt: float) -> None:
         """Accept the converged increment: each effect updates its history, then the pose."""
         for component in self.components:

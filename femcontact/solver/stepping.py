@@ -235,26 +235,44 @@ class Simulation:
         return self.newton.solve(load, stiff_start=True)
 
     def stabilized_solve(self, load) -> int:
-        """Continuation in the contact stabilisation down to zero. If the exact equations
-        (last factor) still fail, as for a body left in neutral equilibrium with vanishing
-        contact forces, the solution of the smallest factor that converged is kept and its
-        stabilisation force (N) is reported in the history."""
+        """Continuation in the contact stabilisation down to zero. Where one equilibrium holds
+        the load whatever the path (`Problem.path_dependent`: no friction), the exact equations
+        (last factor) are tried at once from the first factor's solution, and the other factors
+        are taken only if they fail; with friction every factor is taken in turn, which keeps the
+        stick-slip state near the loading path. If the exact equations still fail, as for a body
+        left in neutral equilibrium with vanishing contact forces, the solution of the smallest
+        factor that converged is kept and its stabilisation force (N) is reported in the history."""
         from femcontact.solver.newton import NewtonFailure
 
-        p, iterations, accepted = self.problem, 0, None
+        p, iterations = self.problem, 0
+        first, *rest = self.options.stabilization_factors
+
+        def spring_force() -> float:  # the spring's force on the rigid body (N)
+            return float(np.linalg.norm(self.newton.stabilization_load()[: p.dim]))
+
         self.stabilized_increments += 1
         try:
-            for factor in self.options.stabilization_factors:
+            self.newton.stabilize(first)
+            iterations += self.newton.solve(load)
+            accepted, self.stabilization_force = p.state(), spring_force()
+            if rest and not p.path_dependent():
+                self.newton.stabilize(rest[-1])
+                try:
+                    iterations += self.newton.solve(load)
+                    self.stabilization_force = spring_force()
+                    return iterations
+                except NewtonFailure:
+                    p.restore(accepted)
+            for factor in rest:
                 self.newton.stabilize(factor)
                 try:
                     iterations += self.newton.solve(load)
                 except NewtonFailure:
-                    if accepted is None or self.stabilization_force > self.options.stabilization_tolerance * self.peak_load:
+                    if self.stabilization_force > self.options.stabilization_tolerance * self.peak_load:
                         raise
                     p.restore(accepted)
                     break
-                accepted = p.state()
-                self.stabilization_force = float(np.linalg.norm(self.newton.stabilization_load()[: p.dim]))
+                accepted, self.stabilization_force = p.state(), spring_force()
         finally:
             self.newton.stabilize(0.0)
         return iterations

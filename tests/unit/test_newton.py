@@ -1,4 +1,5 @@
-"""The Newton solver's rigid step (solver/newton.py) is capped at one contact element.
+"""The Newton solver's rigid step (solver/newton.py) is capped at one contact element; the
+solver knows where several equilibria may hold one load (`Problem.path_dependent`).
 
 A body without stiffness in some direction would otherwise leap through its partner: its
 translations are capped at the contact element size h (mm) and its rotations at h / size
@@ -27,3 +28,13 @@ def test_a_rigid_step_without_stiffness_is_capped_at_one_contact_element(held):
     assert lengths.max() == pytest.approx(problem.contact_size, rel=1e-12)
     rotation = step[-1]  # rz, free in every variant
     assert abs(rotation) == pytest.approx(problem.contact_size / problem.body_size, rel=1e-12)
+
+
+@pytest.mark.parametrize("overrides, several_equilibria", [
+    ([], True),  # Coulomb friction: several stick-slip states may hold one load
+    (["contact.mu=0.0"], False),  # the friction effect named, but no friction acts
+    (["effects=['plane_strain']"], False),
+])
+def test_the_solver_knows_where_an_answer_depends_on_its_path(overrides, several_equilibria):
+    simulation = Simulation(load_scene(SCENES / "wedging_2d.toml", ["mesh.resolution=0.35", *overrides]))
+    assert simulation.problem.path_dependent() is several_equilibria
