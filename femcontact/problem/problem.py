@@ -23,10 +23,13 @@ from femcontact.errors import InputError
 from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
+VERTEX_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "quadrature_weights": [1 / 6] * 3}
+"""Contact points on a reference triangle (area 1/2) for 3-D P1 facets: its vertices."""
 EXACT_SURFACE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
                       "quadrature_weights": [1 / 24] * 3 + [1 / 8] * 3}
 """Contact points on a reference triangle (area 1/2) for exact surfaces: the vertex rule on the four
-triangles that halve its edges, so the points are the nodes of a quadratic triangle."""
+triangles that halve its edges (`VERTEX_RULE` on each), so the points are the nodes of a
+quadratic triangle."""
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 
 
@@ -117,7 +120,7 @@ class Problem:
         """Contact terms use a fixed rule, so the residual and its derivatives integrate alike.
         In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact: a
         penetrating corner node is seen at once); basix has no such rule on triangles, so
-        3-D P1 uses the facet's vertices as a custom rule (the nodes also lie on the exact
+        3-D P1 uses the facet's vertices as a custom rule (`VERTEX_RULE`; the nodes also lie on the exact
         curved surface, the facets' interior does not) and 3-D P2 Gauss points of degree 2p + 2.
         On exact surfaces (`contact.surface = "exact"`, 3-D P1) the points are the vertices and
         edge midpoints, each facet's vertex rule on its four halved triangles (`EXACT_SURFACE_RULE`)."""
@@ -126,9 +129,7 @@ class Problem:
         elif self.scene["contact"]["surface"] == "exact":
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **EXACT_SURFACE_RULE}
         elif degree == 1:
-            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1,
-                          "quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-                          "quadrature_weights": [1 / 6] * 3}
+            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **VERTEX_RULE}
         else:
             quadrature = {"quadrature_degree": 2 * degree + 2}
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.model.facet_tags, metadata=quadrature)

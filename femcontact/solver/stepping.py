@@ -229,10 +229,12 @@ class Simulation:
         rigid.sync()
 
     def plain_solve(self, load) -> int:
-        """Newton on the exact equations from the last converged state, unless the rigid body
-        floats there (`SchurNewton.solve`'s `stiff_start`): then the stabilised continuation
-        follows the load from that state instead."""
-        return self.newton.solve(load, stiff_start=True)
+        """Newton on the exact equations from the last converged state. Where several equilibria
+        may hold the load (`Problem.path_dependent`: friction) and the rigid body floats there
+        (`SchurNewton.solve`'s `stiff_start`), the stabilised continuation follows the load from
+        that state instead: a free first step could carry the body to another equilibrium.
+        Without friction one equilibrium holds the load, wherever Newton starts."""
+        return self.newton.solve(load, stiff_start=self.problem.path_dependent())
 
     def stabilized_solve(self, load) -> int:
         """Continuation in the contact stabilisation down to zero. Where one equilibrium holds
