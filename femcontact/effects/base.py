@@ -17,7 +17,8 @@ Every hook has a do-nothing default, so an effect writes only what it needs:
 - `state()` / `restore(state)`: copies of its history (to retry a cut increment, checkpoints);
 - `rigid_residual(load)` / `rigid_stiffness(load)`: terms of the rigid body's equations;
 - `add_contact_residual(vector)` / `add_contact_jacobian(matrices, kur, bc_dofs)`: entries of
-  the contact vector not written as integrals (node-to-segment elements), and `point_contacts()`:
+  the contact vector not written as integrals (node-to-segment elements; `kur` maps each free
+  rigid dof to the vector of their derivatives by it), and `point_contacts()`:
   the same forces for the contact fields (`outputs/fields.py`);
 - `nodal_outputs()` (UFL values lumped to contact nodes, counted per row), `outputs()`
   (extra history columns) and `cell_fields()` (UFL values written per cell with the final

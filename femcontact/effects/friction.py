@@ -25,6 +25,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
+from femcontact.jit import compile_forms
 from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
 
@@ -69,13 +70,13 @@ class Friction(Effect):
         self.slip = ufl.conditional(ufl.And(touching, ufl.Not(stuck)), 1.0, 0.0)
         problem.add_traction(tangential)
         v, w = ufl.TestFunction(self.W), ufl.TrialFunction(self.W)
-        self.traction_form = fem.form(ufl.dot(tangential, v) * problem.ds_contact)
-        self.area_form = fem.form(sum(v[k] for k in range(problem.dim)) * problem.ds_contact)
-        # L2 projection onto the contact trace, for elements whose lumped areas vanish (P2 facets
-        # in 3-D: a quadratic triangle's vertex functions integrate to zero); the tiny volume term
-        # (relative 1e-10 per element size) only makes the matrix regular off the contact facets
+        # the L2 projection onto the contact trace is for elements whose lumped areas vanish (P2
+        # facets in 3-D: a quadratic triangle's vertex functions integrate to zero); its tiny volume
+        # term (relative 1e-10 per element size) only makes the matrix regular off the contact facets
         size = problem.model.h_contact
-        self.projection_form = fem.form(ufl.inner(w, v) * problem.ds_contact + 1e-10 * size * ufl.inner(w, v) * problem.dx)
+        self.traction_form, self.area_form, self.projection_form = compile_forms([
+            ufl.dot(tangential, v) * problem.ds_contact, sum(v[k] for k in range(problem.dim)) * problem.ds_contact,
+            ufl.inner(w, v) * problem.ds_contact + 1e-10 * size * ufl.inner(w, v) * problem.dx])
         self.projection = None
 
     def lock_contacts(self, on: bool) -> bool:

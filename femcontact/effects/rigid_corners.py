@@ -280,7 +280,8 @@ class RigidCorners(Effect):
                 local.array[dofs] += entries
 
     def add_contact_jacobian(self, matrices, kur, bc_dofs: set) -> None:
-        """Add dC/du to each matrix (local indices) and dC/dr to the kur vectors' local forms."""
+        """Add dC/du to each matrix (local indices) and dC/dr to the kur vectors' local forms
+        (`kur`: rigid dof -> vector, the free dofs)."""
         contributions, _ = self.contributions(with_jacobian=True)
         for matrix in matrices:
             matrix.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
@@ -290,7 +291,7 @@ class RigidCorners(Effect):
             rows = dofs[keep]
             for matrix in matrices:
                 matrix.setValuesLocal(rows, rows, dC_du[np.ix_(keep, keep)], addv=PETSc.InsertMode.ADD_VALUES)
-            for j, vector in enumerate(kur):
+            for j, vector in kur.items():
                 with vector.localForm() as local:
                     local.array[dofs] += dC_dr[:, j]
 

@@ -12,6 +12,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from femcontact.errors import InputError
+from femcontact.jit import compile_forms
 
 
 class Recorder:
@@ -22,7 +23,6 @@ class Recorder:
         self.observers = []  # called after each row, while the increment's state is not yet committed
         p, comm = problem, problem.mesh.comm
         self.comm = comm
-        self.energy = fem.form(p.energy_density * p.dx)
         degree = p.scene["mesh"]["degree"] - 1
         self.W = fem.FunctionSpace(p.mesh, ("DG", degree))
         self.von_mises = fem.Function(self.W, name="von_mises")
@@ -36,7 +36,8 @@ class Recorder:
         values = list(nodal.values()) + [1.0]
         self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
         q = ufl.TestFunction(self.Q)
-        self.nodal_form = fem.form(sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact)
+        self.energy, self.nodal_form = compile_forms(
+            [p.energy_density * p.dx, sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact])
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
         x = newton.coordinates

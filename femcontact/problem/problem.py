@@ -21,6 +21,7 @@ from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
 from femcontact.errors import InputError
 from femcontact.physics.rigid_body import scene_rigid_body
+from femcontact.jit import compile_forms
 from femcontact.physics.rotation import rotation_numpy
 
 VERTEX_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "quadrature_weights": [1 / 6] * 3}
@@ -34,17 +35,12 @@ SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", 
 
 
 class Forms(SimpleNamespace):
-    """A problem's compiled forms; the whole Jacobian and the bulk stiffness only when a solver
-    first asks for them (which of them it needs depends on its options: solver/linear.py)."""
+    """A problem's compiled forms; the whole Jacobian only when a solver first asks for it
+    (whether it does depends on its options: solver/linear.py)."""
 
     @functools.cached_property
     def jacobian(self):
         return fem.form(self.jacobian_integrand)
-
-    @functools.cached_property
-    def jacobian_bulk(self):
-        """The bulk stiffness where it does not depend on the state, else None."""
-        return None if self.jacobian_bulk_integrand is None else fem.form(self.jacobian_bulk_integrand)
 
 
 class Problem:
@@ -99,22 +95,23 @@ class Problem:
 
     # -- forms ---------------------------------------------------------------------------
     def _compile(self) -> Forms:
-        """The forms the solver assembles. `jacobian_bulk` (None unless it exists) is the bulk
-        stiffness where it does not depend on the state, only on `bulk_constants` (the solver
-        may then factor it once: solver/linear.py); it and the whole `jacobian` are compiled
-        when first used."""
+        """The forms the solver assembles, compiled together (`compile_forms`) but for the whole
+        `jacobian`, compiled when first used. `jacobian_bulk` is the bulk stiffness where it does
+        not depend on the state, only on `bulk_constants` (the solver may then factor it once:
+        solver/linear.py), else None. `contact_dr` maps each free rigid dof to the contact
+        vector's derivative by it; a held or prescribed dof is no unknown and has none."""
         du = ufl.TrialFunction(self.V)
         contact = self.contact_integrand * self.ds_contact
         d_contact_dr = ufl.diff(self.contact_integrand, self.rigid.variable)
         bulk_jacobian = ufl.algorithms.expand_derivatives(ufl.derivative(self.bulk, self.u, du))
         state_free = not bulk_jacobian.coefficients()
         self.bulk_constants = bulk_jacobian.constants() if state_free else ()
-        return Forms(
-            residual_bulk=fem.form(self.bulk), residual_contact=fem.form(contact),
-            jacobian_bulk_integrand=bulk_jacobian if state_free else None,
-            jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du),
-            jacobian_contact=fem.form(ufl.derivative(contact, self.u, du)),
-            contact_dr=[fem.form(d_contact_dr[j] * self.ds_contact) for j in range(len(self.rigid.names))])
+        free = [int(j) for j in np.flatnonzero(self.rigid.free)]
+        forms = [self.bulk, contact, ufl.derivative(contact, self.u, du)] + [d_contact_dr[j] * self.ds_contact for j in free]
+        residual_bulk, residual_contact, jacobian_contact, *rest = compile_forms(forms + ([bulk_jacobian] * state_free))
+        return Forms(residual_bulk=residual_bulk, residual_contact=residual_contact, jacobian_contact=jacobian_contact,
+                     contact_dr=dict(zip(free, rest)), jacobian_bulk=rest[len(free)] if state_free else None,
+                     jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du))
 
     def _contact_measure(self, degree: int):
         """Contact terms use a fixed rule, so the residual and its derivatives integrate alike.

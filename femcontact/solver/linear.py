@@ -191,7 +191,7 @@ class ContactUpdate:
             if self.full is None:
                 self.full = Factorization(self.problem, self.petsc_options, self.prefix)
             self.full.begin()
-            self.problem.add_contact_jacobian([self.full.K], [], self.problem.support_dof_set)
+            self.problem.add_contact_jacobian([self.full.K], {}, self.problem.support_dof_set)
             self.full.factor(Kc)
             return
         self.S = S

@@ -74,7 +74,7 @@ class SchurNewton:
         self.Kc = petsc.create_matrix(forms.jacobian_contact)
         self.b_bulk = petsc.create_vector(forms.residual_bulk)
         self.b_contact = petsc.create_vector(forms.residual_contact)
-        self.kur = [petsc.create_vector(form) for form in forms.contact_dr]
+        self.kur = {j: petsc.create_vector(form) for j, form in forms.contact_dr.items()}  # free dofs only
         self.work = [p.u.vector.copy() for _ in range(2 * n_r)]
         self.n_owned = p.V.dofmap.index_map.size_local
         self.coordinates = p.V.tabulate_dof_coordinates()[: self.n_owned, : p.dim]
@@ -249,16 +249,16 @@ class SchurNewton:
     def direction(self, load, R_u, R_r):
         """Newton direction (du Vec, dr array) from the Schur complement."""
         p = self.problem
-        n_r, free = len(p.rigid.names), p.rigid.free
+        n_r, free = len(p.rigid.names), np.flatnonzero(p.rigid.free)  # held and prescribed dofs are no unknowns
         self.Kc.zeroEntries()
         petsc.assemble_matrix(self.Kc, p.forms.jacobian_contact)
-        for b, form in zip(self.kur, p.forms.contact_dr):
+        for b, form in zip(self.kur.values(), p.forms.contact_dr.values()):
             with b.localForm() as local:
                 local.set(0.0)
             petsc.assemble_vector(b, form)
         p.add_contact_jacobian([self.Kc] + self.linear.begin(), self.kur, self.bc_dofs)
         self.Kc.assemble()
-        for b in self.kur:
+        for b in self.kur.values():
             b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         try:
             self.linear.factor(self.Kc)
@@ -267,12 +267,12 @@ class SchurNewton:
 
         contact = self.b_contact.array_r.reshape(-1, p.dim)
         modes = self._modes()
-        # dR_r/du rows: -(W^T Kc + C^T dW/du)
+        # dR_r/du rows of the free dofs: -(W^T Kc + C^T dW/du)
         K_ru = []
         axes = [2] if p.dim == 2 else [0, 1, 2]
-        for j, mode in enumerate(modes):
+        for j in free:
             w, row = self.work[j], self.work[n_r + j]
-            w.array_w[:] = mode
+            w.array_w[:] = modes[j]
             self.Kc.multTranspose(w, row)
             if j >= p.dim:
                 row.array_w[:] += cross_with_axis(contact, axes[j - p.dim]).reshape(-1)
@@ -281,15 +281,15 @@ class SchurNewton:
         # dR_r/dr: -(W^T dC/dr + C^T dW/dr) - dQ_ext/dr + the effects' rigid stiffness
         total_contact = np.array([self._allsum(contact[:, k].sum()) for k in range(p.dim)])
         K_rr = np.zeros((n_r, n_r))
-        for j, mode in enumerate(modes):
-            for k in range(n_r):
-                K_rr[j, k] = -self._allsum(float(mode @ self.kur[k].array_r))
+        for j in free:
+            for k in free:
+                K_rr[j, k] = -self._allsum(float(modes[j] @ self.kur[k].array_r))
         for j in range(p.dim, n_r):  # d(e_a x (x - x_ref))/dt = -e_a x dt
             K_rr[j, : p.dim] += cross_with_axis(total_contact[None, :], axes[j - p.dim])[0]
         K_rr += -load.generalized_force_jacobian(p.rigid.values) + p.rigid_stiffness(load) + self.stabilization
 
         columns = []
-        for k in range(n_r):
+        for k in free:
             rhs = self.kur[k].copy()
             petsc.set_bc(rhs, p.bcs, scale=0.0)
             columns.append(rhs)
@@ -297,19 +297,19 @@ class SchurNewton:
             y, *X = self.linear.solve([R_u] + columns)
         except LinearSolveFailed as error:
             raise NewtonFailure(str(error), []) from None
-        S = K_rr - np.array([[K_ru[i].dot(X[k]) for k in range(n_r)] for i in range(n_r)])
-        S_ff = S[np.ix_(free, free)]
+        S_ff = K_rr[np.ix_(free, free)] - np.array([[row.dot(x) for x in X] for row in K_ru]).reshape(len(free), len(free))
         dr, shifted = self._condensed_step(K_ru, S_ff, y, R_r)
         self._factored = (K_ru, X, S_ff, shifted)
-        return self._assemble_step(y, X, dr), dr
+        return self._assemble_step(y, X, dr[free]), dr
 
     def _condensed_step(self, K_ru, S_ff, y, R_r, shifted: bool | None = None) -> tuple[np.ndarray, bool]:
-        """The rigid step dr from S dr = -R_r + K_ru y (free dofs; see `_rigid_step`), and whether
-        S was shifted. `shifted=None`: shifted only where the plain step meets no stiffness."""
+        """The rigid step dr from S dr = -R_r + K_ru y (free dofs, K_ru their rows; see
+        `_rigid_step`), and whether S was shifted. `shifted=None`: shifted only where the plain
+        step meets no stiffness."""
         free = self.problem.rigid.free
         dr = np.zeros(len(free))
         if free.any():
-            rhs_r = (-R_r + np.array([K_ru[i].dot(y) for i in range(len(free))]))[free]
+            rhs_r = -R_r[free] + np.array([row.dot(y) for row in K_ru])
             dr[free] = self._rigid_step(S_ff, rhs_r, shifted=bool(shifted))
             if shifted is None:
                 shifted = bool(dr[free] @ S_ff @ dr[free] <= 0)  # no stiffness along the step
@@ -318,12 +318,12 @@ class SchurNewton:
         return dr, bool(shifted)
 
     @staticmethod
-    def _assemble_step(y, X, dr):
-        """du = -(y + X dr) (y is overwritten)."""
+    def _assemble_step(y, X, dr_free):
+        """du = -(y + X dr) (X the free dofs' columns; y is overwritten)."""
         du = y
         du.scale(-1.0)
-        for k in range(len(dr)):
-            du.axpy(-dr[k], X[k])
+        for x, d in zip(X, dr_free):
+            du.axpy(-d, x)
         return du
 
     def correction(self, R_u, R_r):
@@ -335,7 +335,7 @@ class SchurNewton:
         except LinearSolveFailed:
             return None
         dr, _ = self._condensed_step(K_ru, S_ff, y, R_r, shifted)
-        return self._assemble_step(y, X, dr), dr
+        return self._assemble_step(y, X, dr[self.problem.rigid.free]), dr
 
     def _rigid_step(self, S_ff, rhs, shifted: bool = False) -> np.ndarray:
         """Solve S dr = rhs for the free rigid dofs inside a trust region.

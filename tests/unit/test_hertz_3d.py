@@ -112,3 +112,16 @@ def test_without_friction_a_body_without_stiffness_needs_no_continuation():
         assert plain[1]["a"] == pytest.approx(other[1]["a"], rel=1e-6)
         assert plain[1]["p0"] == pytest.approx(other[1]["p0"], rel=1e-6)
     assert plain[2] < straight[2] < ladder[2]
+
+
+def test_only_the_free_rigid_dof_has_derivative_forms():
+    """The sphere moves along z only (x, y and the rotations held): the contact vector is
+    differentiated by z alone, and each Newton direction solves for its one column."""
+    from femcontact.families.hertz import benchmark as hertz
+    from femcontact.solver.stepping import Simulation
+
+    simulation = Simulation(hertz.scene_3d(benchmark_radius_3d() / 2.5))
+    rigid = simulation.problem.rigid
+    assert [name for name, free in zip(rigid.names, rigid.free) if free] == ["z"]
+    assert list(simulation.problem.forms.contact_dr) == [2]
+    assert list(simulation.newton.kur) == [2]
