@@ -157,15 +157,17 @@ def counting(counts: dict):
 
 
 def wedging_case(overrides: list[str] = ()) -> dict:
-    """The 2-D wedging scene with `overrides`, warm (forms compiled: the default case, without
-    overrides, runs once unmeasured first, and the variants after it reuse its forms): Newton
-    iterations per increment by step, residual assemblies and Newton directions, wall time (s),
-    status."""
+    """The 2-D wedging scene with `overrides`, warm (it runs once unmeasured first: a variant's
+    forms differ from the default case's where it changes what they hold as numbers, such as the
+    contact element size): Newton iterations per increment by step, residual assemblies and
+    Newton directions, wall time (s), status."""
     from femcontact.families import load_scene
 
     scene = load_scene(SCENES / "wedging_2d.toml", list(overrides))
-    if not overrides:
-        Simulation(scene, MPI.COMM_SELF).run()  # compile the forms outside the measurement
+    try:  # compile the forms outside the measurement
+        Simulation(scene, MPI.COMM_SELF).run()
+    except Exception:  # the measured run below records the failure
+        pass
     with counting({"residual": 0, "direction": 0}) as counts:
         start = time.perf_counter()
         simulation = Simulation(scene, MPI.COMM_SELF)

@@ -3,8 +3,9 @@
 A rigid sphere (R 50 mm, P 2000 N) on a block (E 200 GPa, nu 0.3), its quarter meshed with
 symmetry planes, on the meshes h_c = a/(2^(L+1) + 0.5) (uniform on r <= 1.5 a, graded
 outside), L = 0..LEVELS, the same mesh for every code (femcontact's gmsh builder). Each code
-runs as a whole process per level: `femcontact hertz --dim 3 --ranks 2` (P1 and P2) warm (its
-forms in the JIT cache) and cold (an empty JIT cache: the forms compiled in the process), and
+runs as a whole process per level: `femcontact hertz --dim 3 --ranks 2` (P1 and P2) cold (an
+empty JIT cache: the forms compiled in the process) and then warm (the cache the cold run
+filled: its forms compiled), and
 benchmarks/getfem_hertz.py --dim 3 (GetFEM 5.4 P2, one process: it compiles nothing). a and p0
 come from each code's nodal pressures by one metric (`hertz.surface_metrics`). States the time
 to reach and stay within 1 % of a and of p0 as the ratio femcontact (2 ranks) / GetFEM, warm
@@ -71,12 +72,16 @@ def measure(levels: int = LEVELS) -> dict:
     for level in range(levels + 1):
         h = repr(a / (2 ** (level + 1) + 0.5))
         for code, command in runs:
-            result = _run(command + ["--contact-size", h])
             cold = None
-            if result is not None and code.startswith("femcontact"):
+            if code.startswith("femcontact"):  # cold in an empty JIT cache, then warm in the cache it filled
                 with tempfile.TemporaryDirectory() as cache:
                     cold = _run(command + ["--contact-size", h], env={"XDG_CACHE_HOME": cache})
-            if result is None or (code.startswith("femcontact") and cold is None):
+                    result = _run(command + ["--contact-size", h], env={"XDG_CACHE_HOME": cache})
+                if cold is None:
+                    continue
+            else:
+                result = _run(command + ["--contact-size", h])
+            if result is None:
                 continue
             rows.append(row(code, level, result, cold))
             r = rows[-1]
