@@ -10,7 +10,7 @@ WEDGING = convergence_3d.LADDERS["wedging_3d"]
 
 def rows(f0: float = 70.0, c: float = -5.0, order: float = 2.0) -> list[dict]:
     out = []
-    for resolution in WEDGING.resolutions:
+    for resolution in convergence_3d.RESOLUTIONS:
         h = 1.0 / resolution
         row = {"resolution": resolution, "status": "ok", "dofs": int(17000 * resolution ** 2.7),
                "newton_iterations": 90, "wall_time": 10.0}
