@@ -20,8 +20,8 @@ from mpi4py import MPI
 from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
 from femcontact.errors import InputError
-from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.jit import compile_forms
+from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
 VERTEX_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "quadrature_weights": [1 / 6] * 3}
