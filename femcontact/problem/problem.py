@@ -107,10 +107,13 @@ class Problem:
         state_free = not bulk_jacobian.coefficients()
         self.bulk_constants = bulk_jacobian.constants() if state_free else ()
         free = [int(j) for j in np.flatnonzero(self.rigid.free)]
-        forms = [self.bulk, contact, ufl.derivative(contact, self.u, du)] + [d_contact_dr[j] * self.ds_contact for j in free]
-        residual_bulk, residual_contact, jacobian_contact, *rest = compile_forms(forms + ([bulk_jacobian] * state_free))
+        bulk_stiffness = [bulk_jacobian] if state_free else []
+        residual_bulk, residual_contact, jacobian_contact, *compiled = compile_forms(
+            [self.bulk, contact, ufl.derivative(contact, self.u, du), *bulk_stiffness]
+            + [d_contact_dr[j] * self.ds_contact for j in free])
+        jacobian_bulk = compiled.pop(0) if state_free else None
         return Forms(residual_bulk=residual_bulk, residual_contact=residual_contact, jacobian_contact=jacobian_contact,
-                     contact_dr=dict(zip(free, rest)), jacobian_bulk=rest[len(free)] if state_free else None,
+                     jacobian_bulk=jacobian_bulk, contact_dr=dict(zip(free, compiled)),
                      jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du))
 
     def _contact_measure(self, degree: int):
