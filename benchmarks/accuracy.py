@@ -49,8 +49,8 @@ def hertz_case(label: str, knob: str, contact_size: float, degree: int = 1, gamm
     from femcontact.solver.stepping import Simulation
 
     start = time.perf_counter()
-    data = hertz.scene(contact_size, gamma=gamma)
-    data["mesh"]["degree"], data["mesh"]["resolution"] = degree, resolution
+    data = hertz.scene(contact_size, gamma=gamma, degree=degree)
+    data["mesh"]["resolution"] = resolution
     if rtol is not None:
         data["solver"]["rtol"] = rtol
     simulation = Simulation(data)

@@ -52,6 +52,7 @@ class Recorder:
             self.zones = {"top": on_contact}
         self.columns = self._columns()
         check_stop_columns(p.scene, self.columns)
+        self._recovery = None  # `recovered_pressure`'s expression, compiled on first use
 
     def _columns(self) -> list[str]:
         """The names of a row's values, in order (history.csv's header)."""
@@ -88,6 +89,19 @@ class Recorder:
         out["coordinates"] = self.Q.tabulate_dof_coordinates()[:n]
         out["on_surface"] = where
         return out
+
+    def recovered_pressure(self) -> tuple[np.ndarray, np.ndarray]:
+        """The contact pressure (MPa) at the displacement's nodes of the contact surface (this
+        rank's owned ones; coordinates in mm): the argument of the pressure's [.]_+ evaluated in
+        every cell with one contact facet (its stress on that facet's normal), averaged over those
+        cells at each node, then [.]_+. Lumped to P1 vertices (`nodal_values`), the pressure of a
+        quadratic displacement, integrated at Gauss points, is smeared over a vertex's patch and
+        moves the contact zone's edge outwards by up to an element; here the edge stays where the
+        pressure's argument changes sign. A node whose cells each have several contact facets (a
+        corner) has no value and is left out."""
+        if self._recovery is None:
+            self._recovery = _PressureRecovery(self.problem)
+        return self._recovery()
 
     def row(self, load, iterations: int, stabilization_force: float = 0.0) -> dict:
         """The outputs after a converged increment; `stabilization_force` (N): the contact
@@ -143,6 +157,65 @@ class Recorder:
         for observe in self.observers:
             observe()
         return row
+
+
+class _PressureRecovery:
+    """`Recorder.recovered_pressure`'s cells, normals and expression, made on first use. The
+    pressure's argument is linear in the facet normal n: arg(n) = arg(0) + sum_k n_k (arg(e_k) -
+    arg(0)). One expression evaluates those dim + 1 parts at the displacement's nodes of every
+    cell (no new finite element to compile); each cell's own contact facet supplies n."""
+
+    def __init__(self, p):
+        from dolfinx import la
+        from dolfinx.cpp.mesh import entities_to_geometry
+        from dolfinx.mesh import compute_midpoints
+
+        mesh, tdim = p.mesh, p.dim
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
+        facets = np.unique(np.concatenate([p.model.facet_tags.find(p.model.facets[name])
+                                           for name in p.model.contact_facets]))
+        cells = np.array([facet_cells.links(f)[0] for f in facets], dtype=np.int32)
+        vertices = mesh.geometry.x[entities_to_geometry(mesh._mesh, tdim - 1, facets, False)][:, :, :tdim]
+        if tdim == 2:
+            edge = vertices[:, 1] - vertices[:, 0]
+            normals = np.column_stack([edge[:, 1], -edge[:, 0]])
+        else:
+            normals = np.cross(vertices[:, 1] - vertices[:, 0], vertices[:, 2] - vertices[:, 0])
+        outward = compute_midpoints(mesh, tdim - 1, facets)[:, :tdim] - compute_midpoints(mesh, tdim, cells)[:, :tdim]
+        normals *= np.sign(np.sum(normals * outward, axis=1))[:, None] / np.linalg.norm(normals, axis=1)[:, None]
+        unique, per_cell = np.unique(cells, return_counts=True)
+        single = np.isin(cells, unique[per_cell == 1]) & (cells < mesh.topology.index_map(tdim).size_local)
+        self.cells, self.normals = cells[single], normals[single]
+
+        _, argument, _ = p.contact.pressure.ufl_operands  # conditional(argument >= 0, argument, 0)
+        facet_normal = ufl.FacetNormal(mesh)
+        at_zero = ufl.replace(argument, {facet_normal: ufl.as_vector([0.0] * tdim)})
+        parts = [at_zero] + [ufl.replace(argument, {facet_normal: ufl.as_vector(np.eye(tdim)[k])}) - at_zero
+                             for k in range(tdim)]
+        V = p.V
+        self.expression = fem.Expression(ufl.as_vector(parts), V.element.interpolation_points())
+        self.nodes_of_cells = V.dofmap.list.array.reshape(len(V.dofmap.list), -1)[self.cells]
+        self.sum, self.count = la.vector(V.dofmap.index_map), la.vector(V.dofmap.index_map)
+        self.add = la.ScatterMode.add
+        n_owned = V.dofmap.index_map.size_local
+        on_surface = fem.locate_dofs_topological(V, tdim - 1, facets)
+        self.nodes = on_surface[on_surface < n_owned]
+        self.coordinates = V.tabulate_dof_coordinates()[self.nodes, :tdim]
+
+    def __call__(self) -> tuple[np.ndarray, np.ndarray]:
+        n_cells, nodes_per_cell = self.nodes_of_cells.shape
+        parts = np.zeros((n_cells, nodes_per_cell, self.normals.shape[1] + 1))
+        if n_cells:  # a rank may own no cell on the contact surface
+            parts[:] = self.expression.eval(self.cells).reshape(parts.shape)
+        argument = parts[:, :, 0] + np.einsum("cnk,ck->cn", parts[:, :, 1:], self.normals)
+        for vector, values in ((self.sum, argument.ravel()), (self.count, 1.0)):
+            vector.array[:] = 0.0
+            np.add.at(vector.array, self.nodes_of_cells.ravel(), values)
+            vector.scatter_reverse(self.add)
+        count = self.count.array[self.nodes]
+        pressure = np.maximum(self.sum.array[self.nodes] / np.where(count > 0, count, 1.0), 0.0)
+        return self.coordinates[count > 0], pressure[count > 0]
 
 
 def assemble_nodal(function, form, add=None) -> None:

@@ -94,9 +94,7 @@ def test_without_friction_a_body_without_stiffness_needs_no_continuation():
     from solver_trace import EVERY_STABILIZATION_FACTOR, stabilization_factors_taken
 
     def run(path_dependent: bool, continuation_first: bool = False):
-        scene = hertz.scene_3d(benchmark_radius_3d() / 2.5)
-        scene["mesh"]["degree"] = 2
-        simulation = Simulation(scene)
+        simulation = Simulation(hertz.scene_3d(benchmark_radius_3d() / 2.5, degree=2))
         assert not simulation.problem.path_dependent()
         simulation.problem.path_dependent = lambda: path_dependent  # as if friction acted
         if continuation_first:

@@ -19,9 +19,10 @@ QUARTER = 4
 """The 3-D scene models a quarter of the block: its force is P / 4."""
 
 
-def scene(contact_size: float, P: float = BENCHMARK["P"], gamma: float = 10.0, increments: int = 2) -> dict:
-    """The benchmark scene with a uniform contact-zone element size (mm); a falls mid-element
-    when a / contact_size is a whole number plus one half."""
+def scene(contact_size: float, P: float = BENCHMARK["P"], gamma: float = 10.0, increments: int = 2,
+          degree: int = 1) -> dict:
+    """The benchmark scene with a uniform contact-zone element size (mm) and Lagrange elements
+    of `degree`; a falls mid-element when a / contact_size is a whole number plus one half."""
     from femcontact.config.scene import resolve_contact
 
     b = BENCHMARK
@@ -30,16 +31,19 @@ def scene(contact_size: float, P: float = BENCHMARK["P"], gamma: float = 10.0, i
         "name": "hertz", "dim": 2, "geometry": "block", "rigid": "indenter", "effects": ["plane_strain"],
         "block": {"width": b["width"], "height": b["height"]}, "indenter": {"shape": "cylinder", "radius": b["R"]},
         "materials": {"block": {"E": b["E"], "nu": b["nu"]}},
-        "mesh": {"contact_size": contact_size, "contact_zone": max(2.5 * a, 4 * contact_size), "size_max": 8.0},
+        "mesh": {"contact_size": contact_size, "contact_zone": max(2.5 * a, 4 * contact_size), "size_max": 8.0,
+                 "degree": degree},
         "contact": {"gamma": gamma},
         "rigid_body": {"dofs": {"x": "held", "rz": "held"}},
         "steps": [{"name": "press", "increments": increments, "force": [0.0, -P], "load_point": "indenter"}],
     })
 
 
-def scene_3d(contact_size: float, P: float = BENCHMARK_3D["P"], gamma: float = 10.0, increments: int = 2) -> dict:
+def scene_3d(contact_size: float, P: float = BENCHMARK_3D["P"], gamma: float = 10.0, increments: int = 2,
+             degree: int = 1) -> dict:
     """The sphere benchmark's quarter model with a uniform element size `contact_size` (mm) on
-    r <= 1.5 a; a falls mid-element when a / contact_size is a whole number plus one half."""
+    r <= 1.5 a and Lagrange elements of `degree`; a falls mid-element when a / contact_size is
+    a whole number plus one half."""
     from femcontact.config.scene import resolve_contact
 
     b = BENCHMARK_3D
@@ -49,7 +53,7 @@ def scene_3d(contact_size: float, P: float = BENCHMARK_3D["P"], gamma: float = 1
         "block": {"width": b["width"], "depth": b["depth"], "height": b["height"], "symmetry": "quarter"},
         "indenter": {"shape": "sphere", "radius": b["R"]},
         "materials": {"block": {"E": b["E"], "nu": b["nu"]}},
-        "mesh": {"contact_size": contact_size, "contact_zone": 1.5 * a, "size_max": 8.0},
+        "mesh": {"contact_size": contact_size, "contact_zone": 1.5 * a, "size_max": 8.0, "degree": degree},
         "contact": {"gamma": gamma},
         "rigid_body": {"dofs": {name: "held" for name in ("x", "y", "rx", "ry", "rz")}},
         "steps": [{"name": "press", "increments": increments, "force": [0.0, 0.0, -P / QUARTER],
@@ -69,13 +73,20 @@ def reference(scene: dict) -> tuple[float, float]:
 
 def surface_nodes(simulation) -> tuple[np.ndarray, np.ndarray]:
     """(r mm, p MPa) of every node of the loaded surface, gathered on all ranks, sorted by r:
-    r = x in 2-D, sqrt(x^2 + y^2) in 3-D; p the lumped nodal contact pressure (0 outside)."""
-    nodal = simulation.recorder.nodal_values()
+    r = x in 2-D, sqrt(x^2 + y^2) in 3-D; p the nodal contact pressure (0 outside). Linear
+    elements: the pressure lumped to the vertices (`Recorder.nodal_values`); quadratic ones:
+    the pressure at every node of the displacement, vertices and edge midpoints, recovered from
+    the cells (`Recorder.recovered_pressure`), where lumping would smear the zone's edge."""
+    recorder = simulation.recorder
     comm, dim = simulation.problem.mesh.comm, simulation.problem.dim
-    on = nodal["on_surface"]
-    x = nodal["coordinates"][on]
+    if simulation.problem.scene["mesh"]["degree"] == 1:
+        nodal = recorder.nodal_values()
+        on = nodal["on_surface"]
+        x, pressure = nodal["coordinates"][on], np.maximum(nodal["pressure"][on], 0.0)
+    else:
+        x, pressure = recorder.recovered_pressure()
     r = np.concatenate(comm.allgather(x[:, 0] if dim == 2 else np.hypot(x[:, 0], x[:, 1])))
-    p = np.concatenate(comm.allgather(np.maximum(nodal["pressure"][on], 0.0)))
+    p = np.concatenate(comm.allgather(pressure))
     order = np.argsort(r, kind="stable")
     return r[order], p[order]
 

@@ -78,8 +78,8 @@ def command(args) -> int:
     if comm.size != args.ranks:
         raise InputError(f"--ranks {args.ranks}: started on {comm.size} ranks")
     startup = time.perf_counter() - START
-    scene = (hertz.scene if args.dim == 2 else hertz.scene_3d)(args.contact_size, increments=args.increments)
-    scene["mesh"]["degree"] = args.degree
+    scene = (hertz.scene if args.dim == 2 else hertz.scene_3d)(args.contact_size, increments=args.increments,
+                                                              degree=args.degree)
     simulation = Simulation(scene, comm)
     simulation.run()
     start = time.perf_counter()
