@@ -7,7 +7,9 @@ rigid sphere (R 50 mm, P 2000 N) on a block, its quarter meshed with symmetry pl
 Prints the dofs, Newton iterations, simulated a (mm) and p0 (MPa), the wall time per phase
 (s, the whole process included) and, with --json, one JSON object whose `surface` lists
 [x (mm), p (MPa)] for every node of the loaded top edge (2-D), [r (mm), p (MPa)] with
-r = sqrt(x^2 + y^2) for every node of the loaded top face (3-D), p = 0 outside contact. With
+r = sqrt(x^2 + y^2) for every node of the loaded top face (3-D), p = 0 outside contact: the
+vertices with --degree 1 (pressures lumped to them), the vertices and edge midpoints with
+--degree 2 (pressures recovered at each node: `Recorder.recovered_pressure`). With
 --ranks N > 1 the command starts itself under `mpirun -n N` (or the launcher in the
 environment variable FEMCONTACT_LAUNCHER, e.g. "srun -n {ranks}").
 """
