@@ -41,11 +41,12 @@ class Recorder:
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
         x = newton.coordinates
+        self.contact_facets = np.unique(np.concatenate([np.zeros(0, dtype=np.int32)] + [
+            p.model.facet_tags.find(p.model.facets[name]) for name in p.model.contact_facets]))
+        nodes = fem.locate_dofs_topological(p.V, p.dim - 1, self.contact_facets)
+        self.contact_nodes = nodes[nodes < n_owned]  # this rank's owned nodes of the contact surface
         on_contact = np.zeros(n_owned, dtype=bool)
-        for name in p.model.contact_facets:
-            facets = p.model.facet_tags.find(p.model.facets[name])
-            dofs = fem.locate_dofs_topological(p.V, p.dim - 1, facets)
-            on_contact[dofs[dofs < n_owned]] = True
+        on_contact[self.contact_nodes] = True
         if p.scene["geometry"] in ("peg_in_hole", "snap_fit"):
             self.zones = {"A": on_contact & (x[:, 0] < 0), "B": on_contact & (x[:, 0] >= 0)}
         else:
@@ -100,7 +101,7 @@ class Recorder:
         pressure's argument changes sign. A node whose cells each have several contact facets (a
         corner) has no value and is left out."""
         if self._recovery is None:
-            self._recovery = _PressureRecovery(self.problem)
+            self._recovery = _PressureRecovery(self.problem, self.contact_facets, self.contact_nodes)
         return self._recovery()
 
     def row(self, load, iterations: int, stabilization_force: float = 0.0) -> dict:
@@ -165,7 +166,8 @@ class _PressureRecovery:
     arg(0)). One expression evaluates those dim + 1 parts at the displacement's nodes of every
     cell (no new finite element to compile); each cell's own contact facet supplies n."""
 
-    def __init__(self, p):
+    def __init__(self, p, facets: np.ndarray, nodes: np.ndarray):
+        """`facets`: this rank's contact facets; `nodes`: its owned nodes on them (V's blocks)."""
         from dolfinx import la
         from dolfinx.cpp.mesh import entities_to_geometry
         from dolfinx.mesh import compute_midpoints
@@ -173,8 +175,6 @@ class _PressureRecovery:
         mesh, tdim = p.mesh, p.dim
         mesh.topology.create_connectivity(tdim - 1, tdim)
         facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
-        facets = np.unique(np.concatenate([p.model.facet_tags.find(p.model.facets[name])
-                                           for name in p.model.contact_facets]))
         cells = np.array([facet_cells.links(f)[0] for f in facets], dtype=np.int32)
         vertices = mesh.geometry.x[entities_to_geometry(mesh._mesh, tdim - 1, facets, False)][:, :, :tdim]
         if tdim == 2:
@@ -198,10 +198,8 @@ class _PressureRecovery:
         self.nodes_of_cells = V.dofmap.list.array.reshape(len(V.dofmap.list), -1)[self.cells]
         self.sum, self.count = la.vector(V.dofmap.index_map), la.vector(V.dofmap.index_map)
         self.add = la.ScatterMode.add
-        n_owned = V.dofmap.index_map.size_local
-        on_surface = fem.locate_dofs_topological(V, tdim - 1, facets)
-        self.nodes = on_surface[on_surface < n_owned]
-        self.coordinates = V.tabulate_dof_coordinates()[self.nodes, :tdim]
+        self.nodes = nodes
+        self.coordinates = V.tabulate_dof_coordinates()[nodes, :tdim]
 
     def __call__(self) -> tuple[np.ndarray, np.ndarray]:
         n_cells, nodes_per_cell = self.nodes_of_cells.shape
