@@ -39,7 +39,9 @@ class SolverOptions:
     stabilization_tolerance: float = 1e-3
     """Largest stabilisation force kept, relative to the peak load on the rigid body (dimensionless)."""
     pseudo_failures: int = 6
-    """Failed pseudo steps after which pseudo-transient continuation gives up."""
+    """Failed pseudo steps after which pseudo-transient continuation gives up; in the last try of
+    an increment, failed pseudo steps in a row (the spring stiffened pseudo_softening **
+    pseudo_failures times without a converged step)."""
     pseudo_iterations: int = 1500
     """Newton iterations (failed ones included) after which pseudo-transient continuation gives up."""
     pseudo_softening: float = 4.0

@@ -11,6 +11,7 @@ exception is a fault, not non-convergence: it ends the run at once.
 Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
 (history file, progress).
 """
+import functools
 import json
 import time
 from pathlib import Path
@@ -182,7 +183,7 @@ class Simulation:
             self.prescribe(load)
             self.stabilization_force = 0.0
             if last_try:
-                ways = [self.pseudo_transient_solve, self.locked_first_solve]
+                ways = [functools.partial(self.pseudo_transient_solve, persist=True), self.locked_first_solve]
             else:
                 ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
@@ -279,7 +280,7 @@ class Simulation:
             self.newton.stabilize(0.0)
         return iterations
 
-    def pseudo_transient_solve(self, load) -> int:
+    def pseudo_transient_solve(self, load, persist: bool = False) -> int:
         """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
         stabilisation spring ties the body to a pose near its own at the start of each pseudo
         step, so a body without stiffness in some direction (pivoting on one contact node after
@@ -306,12 +307,15 @@ class Simulation:
 
         It gives up after `pseudo_failures` failed pseudo steps or `pseudo_iterations` Newton
         iterations (all `SolverOptions`), and then for the rest of the step except the last try
-        of an increment (`increment(last_try=True)`). The body's travel when it gives up (its
+        of an increment (`increment(last_try=True)`, `persist`): there, where no cut is left to
+        follow the load more closely, only failures in a row count (a failure followed by
+        converged pseudo steps is progress). The body's travel when it gives up (its
         pose's change at the last converged pseudo step, mm and rad) is kept by step in
         `pseudo_travel`: how far the load carried it without finding rest."""
         from femcontact.solver.newton import NewtonFailure
 
-        p, options, iterations, spent, failures = self.problem, self.options, 0, 0, 0
+        p, options, iterations, spent = self.problem, self.options, 0, 0
+        failures, failed = 0, 0  # failed pseudo steps counted (in a row where `persist`), in all
         momentum = options.pseudo_momentum if self.newton.linear.direct else 0.0
         factor, floor, pose = 1.0, 0.0, p.rigid.values.copy()
         velocity = np.zeros_like(pose)  # the pose's change in the last pseudo step (mm, rad)
@@ -326,11 +330,12 @@ class Simulation:
                 except NewtonFailure as failure:
                     p.restore(start)
                     spent += len(failure.history)
-                    failures += 1
+                    failures, failed = failures + 1, failed + 1
                     factor *= options.pseudo_softening
                     floor, velocity = factor, np.zeros_like(pose)
                     continue
                 iterations, spent = iterations + taken, spent + taken
+                failures = 0 if persist else failures
                 p.commit_contacts()
                 force = self.newton.stabilization_force()
                 if force <= options.stabilization_tolerance * self.peak_load:
@@ -353,7 +358,7 @@ class Simulation:
         self.pseudo_transient_exhausted = load.step
         self.pseudo_travel[load.step] = travel
         raise NewtonFailure(f"the rigid body did not come to rest by pseudo-transient continuation "
-                            f"({failures} failed pseudo steps, {spent} Newton iterations; it moved by "
+                            f"({failed} failed pseudo steps, {spent} Newton iterations; it moved by "
                             f"{np.array2string(travel, precision=4)} (mm, rad))", [])
 
     def locked_first_solve(self, load) -> int:
