@@ -115,14 +115,18 @@ def test_a_push_turns_the_peg_upright_from_far(case):
     simulation = Simulation(scene, MPI.COMM_WORLD)
     tilt = simulation.problem.rigid.tilt()
     simulation.run_step(0, scene["steps"][0])  # raises SimulationFailed where an increment does not converge
-    row = simulation.history[-1]
+    assert_at_rest_upright_against_the_left_wall(simulation.history[-1], tilt, push, scene["contact"]["mu"])
+
+
+def assert_at_rest_upright_against_the_left_wall(row, tilt, push, mu):
+    """`row`: the pushed peg's last history row; `tilt` (rad): its lean where it was placed."""
     assert row["stabilization_force"] == 0.0  # the exact equations hold
     assert abs(np.radians(row["tilt_deg"])) < 1e-3 * tilt  # upright
     assert row["contact_B_force"] == 0.0  # the right wall lets go
     # the left wall alone balances the push (solver tolerance 1e-6 N), inside its friction cone
     assert row["contact_A_Fx"] == pytest.approx(push[0], abs=1e-5)
     assert row["contact_A_Fy"] == pytest.approx(push[1], abs=1e-5)
-    assert abs(row["contact_A_Fy"]) < -row["contact_A_Fx"] * scene["contact"]["mu"]
+    assert abs(row["contact_A_Fy"]) < -row["contact_A_Fx"] * mu
 
 
 # A push of 0.15 N down and to the left (mu 0.325; the rigid two-point statics need 0.151: seed 2's
@@ -141,11 +145,4 @@ def test_the_last_try_brings_a_turning_peg_to_rest():
     simulation = Simulation(scene, MPI.COMM_WORLD)
     tilt = simulation.problem.rigid.tilt()
     simulation.run_step(0, scene["steps"][0])  # raises SimulationFailed where an increment does not converge
-    row = simulation.history[-1]
-    assert row["stabilization_force"] == 0.0  # the exact equations hold
-    assert abs(np.radians(row["tilt_deg"])) < 1e-3 * tilt  # upright
-    assert row["contact_B_force"] == 0.0  # the right wall lets go
-    # the left wall alone balances the push (solver tolerance 1e-6 N), inside its friction cone
-    assert row["contact_A_Fx"] == pytest.approx(LAST_TRY_PUSH[0], abs=1e-5)
-    assert row["contact_A_Fy"] == pytest.approx(LAST_TRY_PUSH[1], abs=1e-5)
-    assert abs(row["contact_A_Fy"]) < -row["contact_A_Fx"] * 0.3248
+    assert_at_rest_upright_against_the_left_wall(simulation.history[-1], tilt, LAST_TRY_PUSH, 0.3248)
