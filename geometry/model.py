@@ -5,6 +5,7 @@ builder (peg_hole_2d, peg_hole_3d, block, snap_fit). Each builder has `sizes(sce
 every rank) and `generate(scene, sizes)` (gmsh, on rank 0 only, returning the tag names);
 `rigid_body(scene)` and `points(scene)` are pure geometry, computed on every rank.
 """
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -112,8 +113,10 @@ def check_mesh(scene: dict) -> float:
 
 
 def build(scene: dict, comm, msh_path=None) -> Model:
-    """Mesh the deformable body of a resolved scene on rank 0 of `comm` and distribute it.
-    `msh_path`: also write the gmsh mesh there (.msh)."""
+    """Mesh the deformable body of a resolved scene on rank 0 of `comm` and distribute it, the same
+    way in every run (SCOTCH on one thread unless SCOTCH_PTHREAD_NUMBER is set: with its threads
+    the cells each rank owned changed from run to run). `msh_path`: also write the gmsh mesh
+    there (.msh)."""
     import gmsh
     from dolfinx.io import gmshio
 
@@ -137,6 +140,7 @@ def build(scene: dict, comm, msh_path=None) -> Model:
     if error is not None:
         raise error
     names = comm.bcast(names, root=0)
+    os.environ.setdefault("SCOTCH_PTHREAD_NUMBER", "1")
     try:
         mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=scene["dim"])
     finally:

@@ -1,5 +1,7 @@
 """The gmsh model built on rank 0 is distributed: run with `mpirun -n 2 python -m pytest tests/mpi`."""
+import numpy as np
 import pytest
+from dolfinx.mesh import compute_midpoints
 from mpi4py import MPI
 
 from femcontact.families import resolve_scene
@@ -29,3 +31,17 @@ def test_mesh_is_distributed(dim):
         assert measures.measure(model, facet=name) == pytest.approx(measures.measure(serial, facet=name), rel=1e-12)
     for name in model.cells:
         assert measures.measure(model, cell=name) == pytest.approx(measures.measure(serial, cell=name), rel=1e-12)
+
+
+def test_the_partition_is_the_same_every_time():
+    """SCOTCH partitions the mesh with one thread (`geometry.model.build`): with several, the cells
+    each rank owns changed from run to run, and with them the order of every parallel sum."""
+    scene = resolve_scene({**SCENE, "dim": 3, "mesh": {"resolution": 0.35}})
+    owned = []
+    for _ in range(8):
+        mesh = build(scene, MPI.COMM_WORLD).mesh
+        tdim = mesh.topology.dim
+        cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+        owned.append(np.round(compute_midpoints(mesh, tdim, cells), 9))
+    for other in owned[1:]:
+        assert other.shape == owned[0].shape and np.array_equal(other, owned[0])
