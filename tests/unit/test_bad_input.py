@@ -501,28 +501,47 @@ def test_failed_launch_quotes_the_launchers_error(tmp_path, capsys):
 
 # -- outputs ---------------------------------------------------------------------------------------
 
-def test_wedge_angles_are_null_with_a_reason_when_contact_is_lost():
-    """A released peg that has lost contact in zone B: the angles to the line of the contact points
-    are undefined, reported as None (JSON null) with the reason, and the peg is not wedged."""
+def released_wedge_metrics(contact_B: tuple, reactions: dict) -> dict:
+    """`wedge_metrics` of the default 2-D wedging scene after a push of (-5, 1) N, released with
+    contact B's centre at `contact_B` (None: no contact) and the support reactions `reactions`
+    ({zone: (x, y)}, N)."""
     from types import SimpleNamespace
 
     from femcontact.families import load_scene
     from femcontact.families.wedging.metrics import wedge_metrics
 
-    scene = load_scene(WEDGING)
     row = {"step": "release", "tilt_deg": 1.25, "applied_Fx": 0.0, "applied_Fy": 0.0, "stabilization_force": 0.0,
            "elastic_energy": 1e-3, "max_von_mises": 10.0, "contact_A_x": -20.0, "contact_A_y": -0.1,
-           "contact_B_x": None, "contact_B_y": None}
-    for zone, sign in (("A", 1.0), ("B", -1.0)):
-        row.update({f"reaction_support_{zone}_x": 3.0 * sign, f"reaction_support_{zone}_y": 0.1 * sign})
+           "contact_B_x": contact_B[0], "contact_B_y": contact_B[1]}
+    for zone, (x, y) in reactions.items():
+        row.update({f"reaction_support_{zone}_x": x, f"reaction_support_{zone}_y": y})
     loaded = {**row, "step": "load", "applied_Fx": -5.0, "applied_Fy": 1.0}
     problem = SimpleNamespace(model=SimpleNamespace(rigid={"tilt": 0.02}), deformable="hole",
                               support_dofs={"support_A": None, "support_B": None})
-    metrics = wedge_metrics(SimpleNamespace(scene=scene, history=[loaded, row], problem=problem,
-                                            timings={"solve": 1.0}))
+    return wedge_metrics(SimpleNamespace(scene=load_scene(WEDGING), history=[loaded, row], problem=problem,
+                                         timings={"solve": 1.0}))
+
+
+def test_wedge_angles_are_null_with_a_reason_when_contact_is_lost():
+    """A released peg that has lost contact in zone B: the angles to the line of the contact points
+    are undefined, reported as None (JSON null) with the reason, and the peg is not wedged."""
+    metrics = released_wedge_metrics((None, None), {"A": (3.0, 0.1), "B": (-3.0, -0.1)})
     assert metrics["angle_A_deg"] is None and metrics["angle_B_deg"] is None
     assert metrics["angle_reason"].startswith("zone B has no contact after release")
     assert metrics["wedged"] is False and metrics["wedge_reason"] == "not collinear"
+
+
+@pytest.mark.parametrize("residual", [1e-9, 4e-8])
+def test_a_free_peg_has_no_balance_or_angles(residual):
+    """A released peg whose residual reactions are round-off (below FORCE_FLOOR of the load) is not
+    wedged, and its reactions' balance and angles, ratios of round-off, are undefined (None), not
+    numbers that change between two runs."""
+    metrics = released_wedge_metrics((20.0, -4.0), {"A": (residual, 0.3 * residual),
+                                                    "B": (-0.7 * residual, 0.3 * residual)})
+    assert metrics["residual_force_A"] == pytest.approx(residual * np.hypot(1.0, 0.3))
+    assert metrics["imbalance"] is None and metrics["angle_A_deg"] is None and metrics["angle_B_deg"] is None
+    assert metrics["angle_reason"].startswith("no residual force after release")
+    assert metrics["wedged"] is False and metrics["wedge_reason"] == "no residual force"
 
 
 def test_mesh_guard_survives_overflowing_sizes(tmp_path, capsys):
