@@ -157,20 +157,21 @@ def wedge_metrics(simulation) -> dict:
     point_A = _vector(final, "contact_A", dim)
     point_B = _vector(final, "contact_B", dim)
     line = point_B - point_A
-    # undefined (JSON null) for a free peg, whose reactions are round-off, and when a zone has
-    # lost contact (no line of the contact points)
+    # undefined (JSON null) for a free peg, whose reactions are round-off; the angles also where a
+    # zone has lost contact (no line of the contact points)
     out["imbalance"] = float(np.linalg.norm(R_A + R_B) / max(np.linalg.norm(R_A), 1e-300)) if held else None
-    angles = [None, None]
-    if held and np.all(np.isfinite(line)):
+    angles, angle_reason = [None, None], None
+    if not held:
+        angle_reason = "no residual force after release: the reactions' balance and angles are undefined"
+    elif not np.all(np.isfinite(line)):
+        angle_reason = "zone " + " and ".join(z for z, p in (("A", point_A), ("B", point_B))
+                                              if not np.all(np.isfinite(p))) \
+            + " has no contact after release: the angles to the line of the contact points are undefined"
+    else:
         angles = [float(np.degrees(np.arccos(np.clip(abs(vector @ line) / max(
             np.linalg.norm(vector) * np.linalg.norm(line), 1e-300), -1, 1)))) for vector in (R_A, R_B)]
     out["angle_A_deg"], out["angle_B_deg"] = angles
-    if not held:
-        out["angle_reason"] = "no residual force after release: the reactions' balance and angles are undefined"
-    else:
-        out["angle_reason"] = None if angles[0] is not None else \
-            "zone " + " and ".join(z for z, p in (("A", point_A), ("B", point_B)) if not np.all(np.isfinite(p))) \
-            + " has no contact after release: the angles to the line of the contact points are undefined"
+    out["angle_reason"] = angle_reason
     out["elastic_energy"] = final["elastic_energy"]
     out["max_von_mises"] = max(row["max_von_mises"] for row in history)
     out["yield_ratio"] = out["max_von_mises"] / scene["materials"][simulation.problem.deformable]["yield_stress"]
