@@ -204,11 +204,7 @@ class ContactUpdate:
         if len(self.columns) + len(new) > self.max_rank:  # forget the columns of dofs left behind
             self.columns = {s: self.columns[s] for s in map(int, S) if s in self.columns}
         if new:
-            unit = np.zeros((r1 - r0, len(new)))
-            for k, s in enumerate(new):
-                if r0 <= s < r1:
-                    unit[s - r0, k] = 1.0
-            solved = _mat_solve(self.ksp, [unit[:, k] for k in range(len(new))], self.Kb)
+            solved = _unit_solve(self.ksp, np.array(new, dtype=np.int64), self.Kb)
             self.columns.update({s: solved[:, k].copy() for k, s in enumerate(new)})
         self.Z = np.column_stack([self.columns[int(s)] for s in S]) if len(S) else np.zeros((r1 - r0, 0))
         self.owned = (S >= r0) & (S < r1)
@@ -281,6 +277,43 @@ def _mat_solve(ksp, columns: list, matrix) -> np.ndarray:
     B.destroy()
     X.destroy()
     if not comm.tompi4py().allreduce(bool(np.all(np.isfinite(result))), op=MPI.LAND):  # every rank raises alike
+        raise LinearSolveFailed("linear solve gave a non-finite result")
+    return result
+
+
+def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:
+    """The factored operator of `ksp` applied to the unit vectors e_dof of the global `dofs`
+    (the same on every rank); returns the owned rows of the solutions, one column each.
+
+    MUMPS takes them as one sparse right-hand side, which it reads on its host (rank 0) alone:
+    B^T is an AIJ matrix whose rows and columns all live there. The solve then skips the parts
+    of the factor the unit vectors do not reach, and no dense right-hand side is gathered to the
+    host. Other factorisation packages get the dense columns."""
+    if ksp.getPC().getFactorSolverType() != "mumps":
+        n_local = matrix.getLocalSize()[0]
+        r0 = matrix.getOwnershipRange()[0]
+        unit = np.zeros((n_local, len(dofs)))
+        owned = (dofs >= r0) & (dofs < r0 + n_local)
+        unit[dofs[owned] - r0, np.flatnonzero(owned)] = 1.0
+        return _mat_solve(ksp, list(unit.T), matrix)
+    comm = matrix.getComm()
+    n_local, n_global = matrix.getLocalSize()[0], matrix.getSize()[0]
+    host = comm.getRank() == 0
+    rows = len(dofs) if host else 0
+    csr = (np.arange(rows + 1, dtype=PETSc.IntType), dofs[:rows].astype(PETSc.IntType), np.ones(rows))
+    Bt = PETSc.Mat().createAIJ([(rows, len(dofs)), (n_global if host else 0, n_global)], csr=csr, comm=comm)
+    B = PETSc.Mat().createTranspose(Bt)
+    X = PETSc.Mat().createDense([(n_local, n_global), (None, len(dofs))], comm=comm)
+    X.setUp()
+    X.assemble()
+    try:
+        ksp.getPC().getFactorMatrix().matSolve(B, X)
+    except PETSc.Error as error:
+        raise LinearSolveFailed(f"linear solve failed (PETSc error {error.ierr})") from None
+    result = X.getDenseArray().copy()
+    for matrix_ in (X, B, Bt):
+        matrix_.destroy()
+    if not comm.tompi4py().allreduce(bool(np.all(np.isfinite(result))), op=MPI.LAND):
         raise LinearSolveFailed("linear solve gave a non-finite result")
     return result
 
