@@ -261,24 +261,11 @@ def _mat_solve(ksp, columns: list, matrix) -> np.ndarray:
     """The factored operator of `ksp` applied to the owned parts `columns` (one call, MUMPS
     solving all at once); returns the owned rows of the solutions, one column each."""
     n_local, n_global = matrix.getLocalSize()[0], matrix.getSize()[0]
-    comm = matrix.getComm()
-    B = PETSc.Mat().createDense([(n_local, n_global), (None, len(columns))], comm=comm)
+    B = PETSc.Mat().createDense([(n_local, n_global), (None, len(columns))], comm=matrix.getComm())
     B.setUp()
     B.getDenseArray()[:] = np.column_stack(columns)
     B.assemble()
-    X = PETSc.Mat().createDense([(n_local, n_global), (None, len(columns))], comm=comm)
-    X.setUp()
-    X.assemble()
-    try:
-        ksp.getPC().getFactorMatrix().matSolve(B, X)
-    except PETSc.Error as error:
-        raise LinearSolveFailed(f"linear solve failed (PETSc error {error.ierr})") from None
-    result = X.getDenseArray().copy()
-    B.destroy()
-    X.destroy()
-    if not comm.tompi4py().allreduce(bool(np.all(np.isfinite(result))), op=MPI.LAND):  # every rank raises alike
-        raise LinearSolveFailed("linear solve gave a non-finite result")
-    return result
+    return _solve_into_dense(ksp, B, matrix)
 
 
 def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:
@@ -296,23 +283,31 @@ def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:
         owned = (dofs >= r0) & (dofs < r0 + n_local)
         unit[dofs[owned] - r0, np.flatnonzero(owned)] = 1.0
         return _mat_solve(ksp, list(unit.T), matrix)
-    comm = matrix.getComm()
-    n_local, n_global = matrix.getLocalSize()[0], matrix.getSize()[0]
+    comm, n_global = matrix.getComm(), matrix.getSize()[0]
     host = comm.getRank() == 0
     rows = len(dofs) if host else 0
     csr = (np.arange(rows + 1, dtype=PETSc.IntType), dofs[:rows].astype(PETSc.IntType), np.ones(rows))
     Bt = PETSc.Mat().createAIJ([(rows, len(dofs)), (n_global if host else 0, n_global)], csr=csr, comm=comm)
-    B = PETSc.Mat().createTranspose(Bt)
-    X = PETSc.Mat().createDense([(n_local, n_global), (None, len(dofs))], comm=comm)
+    return _solve_into_dense(ksp, PETSc.Mat().createTranspose(Bt), matrix, also=(Bt,))
+
+
+def _solve_into_dense(ksp, B, matrix, also=()) -> np.ndarray:
+    """X = F^-1 B with `ksp`'s factor F, X dense and row-distributed like `matrix`; returns its
+    owned rows and destroys B and the matrices `also` (every rank raises alike on a failure)."""
+    comm = matrix.getComm()
+    n_local, n_global = matrix.getLocalSize()[0], matrix.getSize()[0]
+    X = PETSc.Mat().createDense([(n_local, n_global), (None, B.getSize()[1])], comm=comm)
     X.setUp()
     X.assemble()
     try:
         ksp.getPC().getFactorMatrix().matSolve(B, X)
     except PETSc.Error as error:
         raise LinearSolveFailed(f"linear solve failed (PETSc error {error.ierr})") from None
+    finally:
+        for temporary in (B, *also):
+            temporary.destroy()
     result = X.getDenseArray().copy()
-    for matrix_ in (X, B, Bt):
-        matrix_.destroy()
+    X.destroy()
     if not comm.tompi4py().allreduce(bool(np.all(np.isfinite(result))), op=MPI.LAND):
         raise LinearSolveFailed("linear solve gave a non-finite result")
     return result
