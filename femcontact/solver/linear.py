@@ -277,18 +277,23 @@ def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:
     of the factor the unit vectors do not reach, and no dense right-hand side is gathered to the
     host. Other factorisation packages get the dense columns."""
     if ksp.getPC().getFactorSolverType() != "mumps":
-        n_local = matrix.getLocalSize()[0]
-        r0 = matrix.getOwnershipRange()[0]
-        unit = np.zeros((n_local, len(dofs)))
-        owned = (dofs >= r0) & (dofs < r0 + n_local)
-        unit[dofs[owned] - r0, np.flatnonzero(owned)] = 1.0
-        return _mat_solve(ksp, list(unit.T), matrix)
+        return _mat_solve(ksp, list(unit_columns(dofs, matrix).T), matrix)
     comm, n_global = matrix.getComm(), matrix.getSize()[0]
     host = comm.getRank() == 0
     rows = len(dofs) if host else 0
     csr = (np.arange(rows + 1, dtype=PETSc.IntType), dofs[:rows].astype(PETSc.IntType), np.ones(rows))
     Bt = PETSc.Mat().createAIJ([(rows, len(dofs)), (n_global if host else 0, n_global)], csr=csr, comm=comm)
     return _solve_into_dense(ksp, PETSc.Mat().createTranspose(Bt), matrix, also=(Bt,))
+
+
+def unit_columns(dofs: np.ndarray, matrix) -> np.ndarray:
+    """The owned rows of the unit vectors e_dof of the global `dofs`, one column each, rows
+    distributed like `matrix`."""
+    r0, r1 = matrix.getOwnershipRange()
+    unit = np.zeros((r1 - r0, len(dofs)))
+    owned = (dofs >= r0) & (dofs < r1)
+    unit[dofs[owned] - r0, np.flatnonzero(owned)] = 1.0
+    return unit
 
 
 def _solve_into_dense(ksp, B, matrix, also=()) -> np.ndarray:

@@ -23,7 +23,7 @@ from femcontact.families import load_scene
 from femcontact.config.scene import SOLVER
 from femcontact.errors import InputError
 from femcontact.solver import linear
-from femcontact.solver.linear import ContactUpdate, Factorization, _mat_solve
+from femcontact.solver.linear import ContactUpdate, Factorization, _mat_solve, unit_columns
 from femcontact.solver.stepping import Simulation
 
 SCENES = Path(__file__).parents[2] / "scenes"
@@ -73,12 +73,7 @@ def unit_columns_error(comm=MPI.COMM_WORLD) -> float:
     dt = step["duration"] / step["increments"]
     simulation.increment(simulation.schedule.load(0, dt, dt))
     update = simulation.newton.linear
-    r0, r1 = update.rows
-    unit = np.zeros((r1 - r0, len(update.S)))
-    owned = (update.S >= r0) & (update.S < r1)
-    unit[update.S[owned] - r0, np.flatnonzero(owned)] = 1.0
-    dense = _mat_solve(update.ksp, list(unit.T), update.Kb)
-    comm = simulation.problem.mesh.comm
+    dense = _mat_solve(update.ksp, list(unit_columns(update.S, update.Kb).T), update.Kb)
     assert comm.allreduce(len(update.S) > 50 and dense.shape == update.Z.shape, op=MPI.LAND)
     return comm.allreduce(float(np.abs(update.Z - dense).max()), op=MPI.MAX) / \
         comm.allreduce(float(np.abs(dense).max()), op=MPI.MAX)
