@@ -11,16 +11,24 @@ K = K_bulk + K_contact. `linear_solver` picks the strategy (`solver.linear`, and
   nonzero only on the dofs S of the active contact's cells (a few hundred in 3-D), K_contact =
   P^T C P with C = K_contact[S, S], and the Woodbury identity gives
 
-      K^-1 B = Y - Z (I + C Z_SS)^-1 C Y_S,     Y = K_bulk^-1 B,  Z = K_bulk^-1 P^T,
+      K^-1 B = Y - Z W = K_bulk^-1 (B - P^T W),   W = (I + C G)^-1 C Y_S,
 
-  with Z's columns cached by dof, so a dof's column is solved once while the contact zone
-  stays put. A refactorisation follows a change in the bulk stiffness's constants (dt);
-  a contact set larger than `max_rank` falls back to `Factorization` for that iteration.
+  with Y = K_bulk^-1 B, Z = K_bulk^-1 P^T and G = Z_S = (K_bulk^-1)[S, S]. Two ways to it,
+  chosen by what they cost (`COLUMNS_PER_SOLVE`):
+  - by columns: Z's columns cached by dof, each solved once while the contact zone stays
+    put; one solve per iteration. Cheap where the contact zone grows by a few dofs at a time.
+  - by block: only G, whose entries MUMPS computes from the factor without the whole columns
+    (`_inverse_columns`); two solves per iteration. Cheap where the contact zone jumps by
+    hundreds of dofs within a few iterations, or its columns outgrow `COLUMN_BYTES`.
+  A refactorisation follows a change in the bulk stiffness's constants (dt) and starts by
+  columns again; a contact set larger than `MAX_RANK` falls back to `Factorization` for that
+  iteration.
 
 The direct strategies solve all right-hand sides in one call to the factor. Supported dofs are
 identity rows of K_bulk and are left out of S (their right-hand sides are zero).
 `check_petsc_options` asks this PETSc whether the solver types a scene names exist.
 """
+import ctypes
 import functools
 
 import numpy as np
@@ -37,11 +45,28 @@ ITERATIVE_PETSC_OPTIONS = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "pc_ty
 ITERATIVE_DOFS = 150_000
 """Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging on 2
 ranks the direct solver ran the whole scene at 109k unknowns in 43 s (103 Newton iterations),
-but at 288k its first 19 Newton iterations took 13 min: the contact set outgrows the
-update's columns (COLUMN_BYTES) and every iteration factors the whole Jacobian again
-(`make bench_solvers`, `make convergence_3d`)."""
+but at 288k its first 19 Newton iterations took 13 min with the update by columns alone: the
+contact set outgrew COLUMN_BYTES and every iteration factored the whole Jacobian again (`make
+bench_solvers`, `make convergence_3d`). By block the update has not been timed at that size."""
+MAX_RANK = 2000
+"""Largest contact set (dofs) the update takes: its dense (I + C G) is solved on every rank."""
 COLUMN_BYTES = 2e8
 """Largest memory (bytes per rank) the cached columns of K_bulk^-1 may take."""
+COLUMNS_PER_SOLVE = 10
+"""What a solve of one right-hand side costs, in unit columns solved together: 18 ms against
+1.3-2 ms a column on 3-D wedging at 16,749 unknowns, 34 ms against 4-6 ms on the 3-D Hertz
+contact at 43,674 (2 ranks). The update goes by block once the columns it has solved since
+the factorisation, with the new ones, would exceed this many per iteration it has served
+and `ITERATIONS_AHEAD` more."""
+ITERATIONS_AHEAD = 8
+"""Newton iterations a new column is counted on to serve (about one increment's)."""
+INVERSE_BLOCKING = 512
+"""Columns of the inverse MUMPS computes together (its ICNTL(27)): on the 3-D Hertz contact at
+64,905 unknowns (2 ranks) 6.8 s for 1,954 dofs' columns in six batches against 8.4 s with
+MUMPS's own choice, 0.72 against 1.1 s at 43,674."""
+SYMMETRY = 1e-12
+"""K_bulk counts as symmetric where |K_ij - K_ji| is at most this times its largest row sum (the
+assembled elastic and mass forms differ from their transposes by round-off, 1e-16 of it)."""
 
 
 PETSC_TYPES = {"ksp_type": "KSP", "pc_type": "PC", "pc_factor_mat_solver_type": "Mat.Solver"}
@@ -154,9 +179,11 @@ class ContactUpdate:
         bc_local = np.array(sorted(problem.support_dof_set), dtype=np.int64)
         self.bc_global = np.unique(np.concatenate(comm.allgather(self._global(bc_local))))
         n_owned = self.rows[1] - self.rows[0]
-        self.max_rank = int(min(2000, COLUMN_BYTES / (8 * max(comm.allreduce(n_owned, op=MPI.MAX), 1))))
+        self.max_rank = MAX_RANK
+        self.iterations_ahead = ITERATIONS_AHEAD
+        self.max_columns = int(COLUMN_BYTES / (8 * max(comm.allreduce(n_owned, op=MPI.MAX), 1)))
         self.key = None  # the bulk stiffness's constants when it was factored
-        self.columns: dict[int, np.ndarray] = {}  # dof -> owned rows of K_bulk^-1 e_dof
+        self.symmetric = False  # whether K_bulk is (to round-off)
         self.use_full = False
 
     def _global(self, local_dofs: np.ndarray) -> np.ndarray:
@@ -177,7 +204,10 @@ class ContactUpdate:
             petsc.assemble_matrix(self.Kb, self.problem.forms.jacobian_bulk, bcs=self.problem.bcs)
             self.Kb.assemble()
             _set_up(self.ksp)
-            self.key, self.columns = key, {}
+            self.symmetric = self.Kb.isSymmetric(SYMMETRY * self.Kb.norm(PETSc.NormType.INFINITY))
+            self.key, self.by_block, self.iterations, self.solved = key, False, 0, 0
+            self.columns: dict[int, np.ndarray] = {}  # by columns: dof -> owned rows of K_bulk^-1 e_dof
+            self.known, self.known_block = np.zeros(0, dtype=np.int64), np.zeros((0, 0))  # by block: G's cache
         r0, r1 = self.rows
         indptr, indices, values = Kc.getValuesCSR()
         nonzero = values != 0.0
@@ -195,21 +225,50 @@ class ContactUpdate:
             self.full.factor(Kc)
             return
         self.S = S
+        self.owned = (S >= r0) & (S < r1)
+        self.owned_rows = S[self.owned] - r0
         keep = np.isin(rows, S) & np.isin(cols, S)
         C = np.zeros((len(S), len(S)))
         np.add.at(C, (np.searchsorted(S, rows[keep]), np.searchsorted(S, cols[keep])), values[nonzero][keep])
         comm.Allreduce(MPI.IN_PLACE, C, op=MPI.SUM)
         self.C = C
         new = [int(s) for s in S if int(s) not in self.columns]
-        if len(self.columns) + len(new) > self.max_rank:  # forget the columns of dofs left behind
-            self.columns = {s: self.columns[s] for s in map(int, S) if s in self.columns}
-        if new:
-            solved = _unit_solve(self.ksp, np.array(new, dtype=np.int64), self.Kb)
-            self.columns.update({s: solved[:, k].copy() for k, s in enumerate(new)})
-        self.Z = np.column_stack([self.columns[int(s)] for s in S]) if len(S) else np.zeros((r1 - r0, 0))
-        self.owned = (S >= r0) & (S < r1)
-        self.owned_rows = S[self.owned] - r0
-        self.M = np.eye(len(S)) + self.C @ self._rows_of_S(self.Z)
+        self.by_block = self.by_block or len(S) > self.max_columns or \
+            self.solved + len(new) > COLUMNS_PER_SOLVE * (self.iterations + self.iterations_ahead)
+        if self.by_block:
+            self.columns, self.Z, self.G = {}, None, self._block(S)
+        else:
+            if len(self.columns) + len(new) > self.max_columns:  # forget the columns of dofs left behind
+                self.columns = {s: self.columns[s] for s in map(int, S) if s in self.columns}
+            if new:
+                solved = _unit_solve(self.ksp, np.array(new, dtype=np.int64), self.Kb)
+                self.columns.update({s: solved[:, k].copy() for k, s in enumerate(new)})
+                self.solved += len(new)
+            self.Z = np.column_stack([self.columns[int(s)] for s in S]) if len(S) else np.zeros((r1 - r0, 0))
+            self.G = self._rows_of_S(self.Z)
+        self.M = np.eye(len(S)) + self.C @ self.G
+        self.iterations += 1
+
+    def _block(self, S: np.ndarray) -> np.ndarray:
+        """(K_bulk^-1)[S, S], from the cache where it holds S. Else the cache grows by S's new
+        dofs (restarting from S past `max_rank`): by their columns alone where K_bulk is
+        symmetric (its inverse too), by all columns where not. A contact zone that shrinks and
+        grows back costs nothing."""
+        if not np.isin(S, self.known).all():
+            union = np.union1d(S, self.known)
+            if len(union) > self.max_rank:
+                union, self.known, self.known_block = S, np.zeros(0, dtype=np.int64), np.zeros((0, 0))
+            new = union[~np.isin(union, self.known)] if self.symmetric else union
+            columns = _inverse_columns(self.ksp, union, new, self.Kb)
+            block = np.empty((len(union), len(union)))
+            at_new, at_known = np.searchsorted(union, new), np.searchsorted(union, self.known)
+            block[:, at_new] = columns
+            if self.symmetric:
+                block[np.ix_(at_known, at_known)] = self.known_block
+                block[np.ix_(at_new, at_known)] = columns[at_known].T
+            self.known, self.known_block = union, block
+        at = np.searchsorted(self.known, S)
+        return self.known_block[np.ix_(at, at)]
 
     def _rows_of_S(self, X: np.ndarray) -> np.ndarray:
         """The rows at the dofs S of a row-distributed array (every rank gets all)."""
@@ -224,8 +283,10 @@ class ContactUpdate:
         B = np.column_stack([b.array_r for b in rhs])
         outside = np.ones(len(B), dtype=bool)
         outside[self.owned_rows] = False
-        # a right-hand side on the dofs S only (the rigid columns: contact rows) needs no solve
+        # a right-hand side on the dofs S only (the rigid columns: contact rows) needs no solve of its own
         on_S = self.problem.mesh.comm.allreduce(np.count_nonzero(B[outside], axis=0), op=MPI.SUM) == 0
+        if self.by_block:
+            return _from_columns(self._solve_by_block(B, on_S), rhs[0])
         Y = np.empty_like(B)
         Y[:, on_S] = self.Z @ self._rows_of_S(B[:, on_S])
         if not on_S.all():
@@ -233,6 +294,17 @@ class ContactUpdate:
         if len(self.S):
             Y = Y - self.Z @ np.linalg.solve(self.M, self.C @ self._rows_of_S(Y))
         return _from_columns(Y, rhs[0])
+
+    def _solve_by_block(self, B: np.ndarray, on_S: np.ndarray) -> np.ndarray:
+        """K^-1 B = K_bulk^-1 (B - P^T W): Y_S = G B_S for the columns `on_S`, solved for the rest."""
+        if len(self.S):
+            Y_S = np.empty((len(self.S), B.shape[1]))
+            Y_S[:, on_S] = self.G @ self._rows_of_S(B[:, on_S])
+            if not on_S.all():
+                Y_S[:, ~on_S] = self._rows_of_S(_mat_solve(self.ksp, list(B[:, ~on_S].T), self.Kb))
+            B = B.copy()
+            B[self.owned_rows] -= np.linalg.solve(self.M, self.C @ Y_S)[self.owned]
+        return _mat_solve(self.ksp, list(B.T), self.Kb)
 
 
 def _krylov_solve(ksp, b):
@@ -266,6 +338,65 @@ def _mat_solve(ksp, columns: list, matrix) -> np.ndarray:
     B.getDenseArray()[:] = np.column_stack(columns)
     B.assemble()
     return _solve_into_dense(ksp, B, matrix)
+
+
+def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.ndarray:
+    """(F^-1)[dofs, columns] for `ksp`'s factor F of `matrix` and sorted global `dofs` and
+    `columns` (the same on every rank); every rank gets the whole array.
+
+    MUMPS computes these entries of the inverse from the factor (ICNTL(30), PETSc's
+    MatMumpsGetInverse), pruning both triangular solves to the paths between the dofs: on the
+    3-D Hertz contact (43,674 unknowns, 638 dofs) 0.94 s on 2 ranks, where the whole columns
+    F^-1 e_dof took 4.9 s. petsc4py 3.18 does not wrap the call; it is reached through the
+    PETSc library petsc4py is linked to. MUMPS reads the requested pattern, the transpose of an
+    AIJ matrix, on its host (rank 0) alone, from the host's diagonal block: all its rows and
+    columns live there. Other factorisation packages solve the dense unit columns."""
+    k, m = len(dofs), len(columns)
+    comm = matrix.getComm()
+    if ksp.getPC().getFactorSolverType() != "mumps":
+        X = _mat_solve(ksp, list(unit_columns(columns, matrix).T), matrix)
+        r0, r1 = matrix.getOwnershipRange()
+        owned = (dofs >= r0) & (dofs < r1)
+        block = np.zeros((k, m))
+        block[owned] = X[dofs[owned] - r0]
+        comm.tompi4py().Allreduce(MPI.IN_PLACE, block, op=MPI.SUM)
+        return block
+    n_global = matrix.getSize()[0]
+    host = comm.getRank() == 0
+    counts = np.zeros(n_global if host else 0, dtype=PETSc.IntType)
+    counts[columns[:len(counts)]] = k  # row j of the pattern is column j of F^-1, its entries at `dofs`
+    indices = np.tile(dofs, m if host else 0).astype(PETSc.IntType)
+    pattern = PETSc.Mat().createAIJ([(len(counts), n_global), (len(counts), n_global)],
+                                    csr=(np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType),
+                                         indices, np.zeros(len(indices))), comm=comm)
+    requested = PETSc.Mat().createTranspose(pattern)
+    factor = ksp.getPC().getFactorMatrix()
+    saved = {icntl: factor.getMumpsIcntl(icntl) for icntl in (21, 27)}  # solution's format, blocking
+    try:
+        factor.setMumpsIcntl(27, INVERSE_BLOCKING)
+        error = _petsc_library().MatMumpsGetInverse(factor.handle, requested.handle)
+        # the call leaves MUMPS computing inverse entries, the solution on the host: undo it all
+        factor.setMumpsIcntl(30, 0)
+        for icntl, value in saved.items():
+            factor.setMumpsIcntl(icntl, value)
+        if comm.tompi4py().allreduce(error, op=MPI.MAX) != 0:
+            raise LinearSolveFailed(f"entries of the inverse failed (PETSc error {error})")
+        _, _, values = pattern.getValuesCSR()
+    finally:
+        requested.destroy()
+        pattern.destroy()
+    block = np.ascontiguousarray(values.reshape(m, k).T) if host else np.empty((k, m))
+    comm.tompi4py().Bcast(block, root=0)
+    return block
+
+
+@functools.lru_cache
+def _petsc_library():
+    """The PETSc library petsc4py runs on, for the calls petsc4py does not wrap."""
+    library = ctypes.CDLL(PETSc.__file__)
+    library.MatMumpsGetInverse.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    library.MatMumpsGetInverse.restype = ctypes.c_int
+    return library
 
 
 def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:

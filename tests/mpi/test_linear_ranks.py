@@ -1,13 +1,15 @@
-"""The contact update's columns on 2 ranks: MUMPS reads a sparse right-hand side on rank 0 alone,
-so every unit vector must reach it whichever rank owns its dof."""
+"""The contact update on 2 ranks: MUMPS reads a sparse right-hand side and the entries of the
+inverse it is asked for on rank 0 alone, so every dof must reach it whichever rank owns it, and
+the solves after the entries of the inverse must hold."""
 import pytest
 from mpi4py import MPI
 
-from tests.unit.test_linear import unit_columns_error
+from tests.unit.test_linear import update_error
 
 pytestmark = pytest.mark.mpi
 
 
-def test_unit_columns_are_the_dense_solves_on_two_ranks():
+@pytest.mark.parametrize("by_block", [False, True])
+def test_update_holds_the_dense_solves_on_two_ranks(by_block):
     assert MPI.COMM_WORLD.size == 2
-    assert unit_columns_error(MPI.COMM_WORLD) <= 1e-12
+    assert update_error(MPI.COMM_WORLD, by_block) <= 1e-12
