@@ -17,7 +17,7 @@ K = K_bulk + K_contact. `linear_solver` picks the strategy (`solver.linear`, and
   chosen by what they cost (`COLUMNS_PER_SOLVE`):
   - by columns: Z's columns cached by dof, each solved once while the contact zone stays
     put; one solve per iteration. Cheap where the contact zone grows by a few dofs at a time.
-  - by block: only G, whose entries MUMPS computes from the factor without the whole columns
+  - by entries: only G, whose entries MUMPS computes from the factor without the whole columns
     (`_inverse_columns`); two solves per iteration. Cheap where the contact zone jumps by
     hundreds of dofs within a few iterations, or its columns outgrow `COLUMN_BYTES`.
   A refactorisation follows a change in the bulk stiffness's constants (dt) and starts by
@@ -47,7 +47,7 @@ ITERATIVE_DOFS = 150_000
 ranks the direct solver ran the whole scene at 109k unknowns in 43 s (103 Newton iterations),
 but at 288k its first 19 Newton iterations took 13 min with the update by columns alone: the
 contact set outgrew COLUMN_BYTES and every iteration factored the whole Jacobian again (`make
-bench_solvers`, `make convergence_3d`). By block the update has not been timed at that size."""
+bench_solvers`, `make convergence_3d`). By entries the update has not been timed at that size."""
 MAX_RANK = 2000
 """Largest contact set (dofs) the update takes: its dense (I + C G) is solved on every rank."""
 COLUMN_BYTES = 2e8
@@ -55,7 +55,7 @@ COLUMN_BYTES = 2e8
 COLUMNS_PER_SOLVE = 10
 """What a solve of one right-hand side costs, in unit columns solved together: 18 ms against
 1.3-2 ms a column on 3-D wedging at 16,749 unknowns, 34 ms against 4-6 ms on the 3-D Hertz
-contact at 43,674 (2 ranks). The update goes by block once the columns it has solved since
+contact at 43,674 (2 ranks). The update goes by entries once the columns it has solved since
 the factorisation, with the new ones, would exceed this many per iteration it has served
 and `ITERATIONS_AHEAD` more."""
 ITERATIONS_AHEAD = 8
@@ -205,9 +205,9 @@ class ContactUpdate:
             self.Kb.assemble()
             _set_up(self.ksp)
             self.symmetric = self.Kb.isSymmetric(SYMMETRY * self.Kb.norm(PETSc.NormType.INFINITY))
-            self.key, self.by_block, self.iterations, self.solved = key, False, 0, 0
+            self.key, self.by_entries, self.iterations, self.solved = key, False, 0, 0
             self.columns: dict[int, np.ndarray] = {}  # by columns: dof -> owned rows of K_bulk^-1 e_dof
-            self.known, self.known_block = np.zeros(0, dtype=np.int64), np.zeros((0, 0))  # by block: G's cache
+            self.known, self.known_entries = np.zeros(0, dtype=np.int64), np.zeros((0, 0))  # by entries: G's cache
         r0, r1 = self.rows
         indptr, indices, values = Kc.getValuesCSR()
         nonzero = values != 0.0
@@ -233,10 +233,10 @@ class ContactUpdate:
         comm.Allreduce(MPI.IN_PLACE, C, op=MPI.SUM)
         self.C = C
         new = [int(s) for s in S if int(s) not in self.columns]
-        self.by_block = self.by_block or len(S) > self.max_columns or \
+        self.by_entries = self.by_entries or len(S) > self.max_columns or \
             self.solved + len(new) > COLUMNS_PER_SOLVE * (self.iterations + self.iterations_ahead)
-        if self.by_block:
-            self.columns, self.Z, self.G = {}, None, self._block(S)
+        if self.by_entries:
+            self.columns, self.Z, self.G = {}, None, self._entries(S)
         else:
             if len(self.columns) + len(new) > self.max_columns:  # forget the columns of dofs left behind
                 self.columns = {s: self.columns[s] for s in map(int, S) if s in self.columns}
@@ -249,7 +249,7 @@ class ContactUpdate:
         self.M = np.eye(len(S)) + self.C @ self.G
         self.iterations += 1
 
-    def _block(self, S: np.ndarray) -> np.ndarray:
+    def _entries(self, S: np.ndarray) -> np.ndarray:
         """(K_bulk^-1)[S, S], from the cache where it holds S. Else the cache grows by S's new
         dofs (restarting from S past `max_rank`): by their columns alone where K_bulk is
         symmetric (its inverse too), by all columns where not. A contact zone that shrinks and
@@ -257,18 +257,18 @@ class ContactUpdate:
         if not np.isin(S, self.known).all():
             union = np.union1d(S, self.known)
             if len(union) > self.max_rank:
-                union, self.known, self.known_block = S, np.zeros(0, dtype=np.int64), np.zeros((0, 0))
+                union, self.known, self.known_entries = S, np.zeros(0, dtype=np.int64), np.zeros((0, 0))
             new = union[~np.isin(union, self.known)] if self.symmetric else union
             columns = _inverse_columns(self.ksp, union, new, self.Kb)
-            block = np.empty((len(union), len(union)))
+            entries = np.empty((len(union), len(union)))
             at_new, at_known = np.searchsorted(union, new), np.searchsorted(union, self.known)
-            block[:, at_new] = columns
+            entries[:, at_new] = columns
             if self.symmetric:
-                block[np.ix_(at_known, at_known)] = self.known_block
-                block[np.ix_(at_new, at_known)] = columns[at_known].T
-            self.known, self.known_block = union, block
+                entries[np.ix_(at_known, at_known)] = self.known_entries
+                entries[np.ix_(at_new, at_known)] = columns[at_known].T
+            self.known, self.known_entries = union, entries
         at = np.searchsorted(self.known, S)
-        return self.known_block[np.ix_(at, at)]
+        return self.known_entries[np.ix_(at, at)]
 
     def _rows_of_S(self, X: np.ndarray) -> np.ndarray:
         """The rows at the dofs S of a row-distributed array (every rank gets all)."""
@@ -285,8 +285,8 @@ class ContactUpdate:
         outside[self.owned_rows] = False
         # a right-hand side on the dofs S only (the rigid columns: contact rows) needs no solve of its own
         on_S = self.problem.mesh.comm.allreduce(np.count_nonzero(B[outside], axis=0), op=MPI.SUM) == 0
-        if self.by_block:
-            return _from_columns(self._solve_by_block(B, on_S), rhs[0])
+        if self.by_entries:
+            return _from_columns(self._solve_by_entries(B, on_S), rhs[0])
         Y = np.empty_like(B)
         Y[:, on_S] = self.Z @ self._rows_of_S(B[:, on_S])
         if not on_S.all():
@@ -295,7 +295,7 @@ class ContactUpdate:
             Y = Y - self.Z @ np.linalg.solve(self.M, self.C @ self._rows_of_S(Y))
         return _from_columns(Y, rhs[0])
 
-    def _solve_by_block(self, B: np.ndarray, on_S: np.ndarray) -> np.ndarray:
+    def _solve_by_entries(self, B: np.ndarray, on_S: np.ndarray) -> np.ndarray:
         """K^-1 B = K_bulk^-1 (B - P^T W): Y_S = G B_S for the columns `on_S`, solved for the rest."""
         if len(self.S):
             Y_S = np.empty((len(self.S), B.shape[1]))
@@ -349,7 +349,7 @@ def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.n
     3-D Hertz contact (43,674 unknowns, 638 dofs) 0.94 s on 2 ranks, where the whole columns
     F^-1 e_dof took 4.9 s. petsc4py 3.18 does not wrap the call; it is reached through the
     PETSc library petsc4py is linked to. MUMPS reads the requested pattern, the transpose of an
-    AIJ matrix, on its host (rank 0) alone, from the host's diagonal block: all its rows and
+    AIJ matrix, on its host (rank 0) alone, from the host's diagonal part: all its rows and
     columns live there. Other factorisation packages solve the dense unit columns."""
     k, m = len(dofs), len(columns)
     comm = matrix.getComm()
@@ -357,10 +357,10 @@ def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.n
         X = _mat_solve(ksp, list(unit_columns(columns, matrix).T), matrix)
         r0, r1 = matrix.getOwnershipRange()
         owned = (dofs >= r0) & (dofs < r1)
-        block = np.zeros((k, m))
-        block[owned] = X[dofs[owned] - r0]
-        comm.tompi4py().Allreduce(MPI.IN_PLACE, block, op=MPI.SUM)
-        return block
+        entries = np.zeros((k, m))
+        entries[owned] = X[dofs[owned] - r0]
+        comm.tompi4py().Allreduce(MPI.IN_PLACE, entries, op=MPI.SUM)
+        return entries
     n_global = matrix.getSize()[0]
     host = comm.getRank() == 0
     counts = np.zeros(n_global if host else 0, dtype=PETSc.IntType)
@@ -385,9 +385,9 @@ def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.n
     finally:
         requested.destroy()
         pattern.destroy()
-    block = np.ascontiguousarray(values.reshape(m, k).T) if host else np.empty((k, m))
-    comm.tompi4py().Bcast(block, root=0)
-    return block
+    entries = np.ascontiguousarray(values.reshape(m, k).T) if host else np.empty((k, m))
+    comm.tompi4py().Bcast(entries, root=0)
+    return entries
 
 
 @functools.lru_cache

@@ -9,7 +9,7 @@ from tests.unit.test_linear import update_error
 pytestmark = pytest.mark.mpi
 
 
-@pytest.mark.parametrize("by_block", [False, True])
-def test_update_holds_the_dense_solves_on_two_ranks(by_block):
+@pytest.mark.parametrize("by_entries", [False, True])
+def test_update_holds_the_dense_solves_on_two_ranks(by_entries):
     assert MPI.COMM_WORLD.size == 2
-    assert update_error(MPI.COMM_WORLD, by_block) <= 1e-12
+    assert update_error(MPI.COMM_WORLD, by_entries) <= 1e-12

@@ -29,13 +29,13 @@ from femcontact.solver.stepping import Simulation
 SCENES = Path(__file__).parents[2] / "scenes"
 
 
-def directions(scene_file: str, overrides: list, max_rank=None, options=None, by_block=False):
+def directions(scene_file: str, overrides: list, max_rank=None, options=None, by_entries=False):
     """Newton directions after one converged increment (the next increment's first iteration),
-    from the scene's own `ContactUpdate` (`by_block`: by block from its first iteration) and
+    from the scene's own `ContactUpdate` (`by_entries`: by entries from its first iteration) and
     from a `Factorization` of the same problem with the PETSc `options` (default: the scene's,
     a direct solve)."""
     simulation = Simulation(load_scene(SCENES / scene_file, overrides))
-    if by_block:
+    if by_entries:
         simulation.newton.linear.iterations_ahead = 0
     step = simulation.scene["steps"][0]
     dt = step["duration"] / step["increments"]
@@ -47,7 +47,7 @@ def directions(scene_file: str, overrides: list, max_rank=None, options=None, by
         newton.linear.max_rank = max_rank
     R_u, R_r, _ = newton.assemble_residual(load)
     du, dr = newton.direction(load, R_u, R_r)
-    assert newton.linear.by_block == by_block
+    assert newton.linear.by_entries == by_entries
     update = (du.array.copy(), dr.copy(), newton.linear)
     newton.linear = Factorization(simulation.problem, options or simulation.options.petsc_options, "full_",
                                   newton._near_nullspace)
@@ -55,46 +55,46 @@ def directions(scene_file: str, overrides: list, max_rank=None, options=None, by
     return update, (du.array.copy(), dr.copy())
 
 
-@pytest.mark.parametrize("by_block", [False, True])
+@pytest.mark.parametrize("by_entries", [False, True])
 @pytest.mark.parametrize("scene_file, overrides", [
     ("wedging_3d.toml", ["mesh.resolution=0.4"]),
     ("wedging_2d.toml", ["mesh.resolution=0.5"]),
     # PETSc's own LU: the update's unit columns as dense right-hand sides (MUMPS's are sparse, its
-    # block entries of the inverse)
+    # entries of the inverse)
     ("wedging_2d.toml", ["mesh.resolution=0.5", "solver.petsc_options={pc_factor_mat_solver_type='petsc'}"]),
 ])
-def test_contact_update_matches_full_factorisation(scene_file, overrides, by_block):
-    (du, dr, linear), (du_full, dr_full) = directions(scene_file, overrides, by_block=by_block)
+def test_contact_update_matches_full_factorisation(scene_file, overrides, by_entries):
+    (du, dr, linear), (du_full, dr_full) = directions(scene_file, overrides, by_entries=by_entries)
     assert not linear.use_full and 0 < len(linear.S) <= linear.max_rank
     assert np.linalg.norm(du - du_full) <= 1e-8 * np.linalg.norm(du_full)
     assert np.linalg.norm(dr - dr_full) <= 1e-8 * np.linalg.norm(dr_full)
 
 
-def update_error(comm=MPI.COMM_WORLD, by_block=False) -> float:
+def update_error(comm=MPI.COMM_WORLD, by_entries=False) -> float:
     """Largest difference between what the contact update holds of K_bulk^-1 (by columns: its
-    columns K_bulk^-1 e_s from MUMPS's sparse right-hand side; by block: (K_bulk^-1)[S, S] from
+    columns K_bulk^-1 e_s from MUMPS's sparse right-hand side; by entries: (K_bulk^-1)[S, S] from
     MUMPS's entries of the inverse) and the same solved as dense right-hand sides, relative to
     the largest entry, on the coarse 3-D wedged cylinder after its first increment (whose solves
     came after them: MUMPS solves again once it has given entries of the inverse)."""
     simulation = Simulation(load_scene(SCENES / "wedging_3d.toml", ["mesh.resolution=0.4"]), comm)
     update = simulation.newton.linear
-    if by_block:
+    if by_entries:
         update.iterations_ahead = 0
     step = simulation.scene["steps"][0]
     dt = step["duration"] / step["increments"]
     simulation.increment(simulation.schedule.load(0, dt, dt))
     dense = _mat_solve(update.ksp, list(unit_columns(update.S, update.Kb).T), update.Kb)
-    held, expected = (update.G, update._rows_of_S(dense)) if by_block else (update.Z, dense)
-    assert comm.allreduce(update.by_block == by_block and len(update.S) > 50 and held.shape == expected.shape,
+    held, expected = (update.G, update._rows_of_S(dense)) if by_entries else (update.Z, dense)
+    assert comm.allreduce(update.by_entries == by_entries and len(update.S) > 50 and held.shape == expected.shape,
                           op=MPI.LAND)
     return comm.allreduce(float(np.abs(held - expected).max()), op=MPI.MAX) / \
         comm.allreduce(float(np.abs(expected).max()), op=MPI.MAX)
 
 
-@pytest.mark.parametrize("by_block", [False, True])
-def test_update_holds_the_dense_solves(by_block):
+@pytest.mark.parametrize("by_entries", [False, True])
+def test_update_holds_the_dense_solves(by_entries):
     """Both are exact solves with one factor; they differ by the order of round-off (1e-15)."""
-    assert update_error(by_block=by_block) <= 1e-12
+    assert update_error(by_entries=by_entries) <= 1e-12
 
 
 def test_contact_update_falls_back_above_its_rank_cap():
