@@ -183,7 +183,6 @@ class ContactUpdate:
         self.iterations_ahead = ITERATIONS_AHEAD
         self.max_columns = int(COLUMN_BYTES / (8 * max(comm.allreduce(n_owned, op=MPI.MAX), 1)))
         self.key = None  # the bulk stiffness's constants when it was factored
-        self.symmetric = False  # whether K_bulk is (to round-off)
         self.use_full = False
 
     def _global(self, local_dofs: np.ndarray) -> np.ndarray:
@@ -204,7 +203,7 @@ class ContactUpdate:
             petsc.assemble_matrix(self.Kb, self.problem.forms.jacobian_bulk, bcs=self.problem.bcs)
             self.Kb.assemble()
             _set_up(self.ksp)
-            self.symmetric = self.Kb.isSymmetric(SYMMETRY * self.Kb.norm(PETSc.NormType.INFINITY))
+            self.symmetric = None  # whether K_bulk is, to round-off: asked where the update first goes by entries
             self.key, self.by_entries, self.iterations, self.solved = key, False, 0, 0
             self.columns: dict[int, np.ndarray] = {}  # by columns: dof -> owned rows of K_bulk^-1 e_dof
             self.known, self.known_entries = np.zeros(0, dtype=np.int64), np.zeros((0, 0))  # by entries: G's cache
@@ -255,6 +254,8 @@ class ContactUpdate:
         symmetric (its inverse too), by all columns where not. A contact zone that shrinks and
         grows back costs nothing."""
         if not np.isin(S, self.known).all():
+            if self.symmetric is None:
+                self.symmetric = self.Kb.isSymmetric(SYMMETRY * self.Kb.norm(PETSc.NormType.INFINITY))
             union = np.union1d(S, self.known)
             if len(union) > self.max_rank:
                 union, self.known, self.known_entries = S, np.zeros(0, dtype=np.int64), np.zeros((0, 0))
@@ -272,10 +273,7 @@ class ContactUpdate:
 
     def _rows_of_S(self, X: np.ndarray) -> np.ndarray:
         """The rows at the dofs S of a row-distributed array (every rank gets all)."""
-        rows = np.zeros((len(self.S), X.shape[1]))
-        rows[self.owned] = X[self.owned_rows]
-        self.problem.mesh.comm.Allreduce(MPI.IN_PLACE, rows, op=MPI.SUM)
-        return rows
+        return _rows_at(self.S, X, self.Kb)
 
     def solve(self, rhs: list) -> list:
         if self.use_full:
@@ -351,20 +349,14 @@ def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.n
     PETSc library petsc4py is linked to. MUMPS reads the requested pattern, the transpose of an
     AIJ matrix, on its host (rank 0) alone, from the host's diagonal part: all its rows and
     columns live there. Other factorisation packages solve the dense unit columns."""
-    k, m = len(dofs), len(columns)
-    comm = matrix.getComm()
     if ksp.getPC().getFactorSolverType() != "mumps":
-        X = _mat_solve(ksp, list(unit_columns(columns, matrix).T), matrix)
-        r0, r1 = matrix.getOwnershipRange()
-        owned = (dofs >= r0) & (dofs < r1)
-        entries = np.zeros((k, m))
-        entries[owned] = X[dofs[owned] - r0]
-        comm.tompi4py().Allreduce(MPI.IN_PLACE, entries, op=MPI.SUM)
-        return entries
-    n_global = matrix.getSize()[0]
+        return _rows_at(dofs, _mat_solve(ksp, list(unit_columns(columns, matrix).T), matrix), matrix)
+    k, m = len(dofs), len(columns)
+    comm, n_global = matrix.getComm(), matrix.getSize()[0]
     host = comm.getRank() == 0
     counts = np.zeros(n_global if host else 0, dtype=PETSc.IntType)
-    counts[columns[:len(counts)]] = k  # row j of the pattern is column j of F^-1, its entries at `dofs`
+    if host:
+        counts[columns] = k  # row j of the pattern is column j of F^-1, its entries at `dofs`
     indices = np.tile(dofs, m if host else 0).astype(PETSc.IntType)
     pattern = PETSc.Mat().createAIJ([(len(counts), n_global), (len(counts), n_global)],
                                     csr=(np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType),
@@ -415,6 +407,17 @@ def _unit_solve(ksp, dofs: np.ndarray, matrix) -> np.ndarray:
     csr = (np.arange(rows + 1, dtype=PETSc.IntType), dofs[:rows].astype(PETSc.IntType), np.ones(rows))
     Bt = PETSc.Mat().createAIJ([(rows, len(dofs)), (n_global if host else 0, n_global)], csr=csr, comm=comm)
     return _solve_into_dense(ksp, PETSc.Mat().createTranspose(Bt), matrix, also=(Bt,))
+
+
+def _rows_at(dofs: np.ndarray, X: np.ndarray, matrix) -> np.ndarray:
+    """The rows at the global `dofs` of X, whose rows are distributed like `matrix`'s; every
+    rank gets all of them."""
+    r0, r1 = matrix.getOwnershipRange()
+    owned = (dofs >= r0) & (dofs < r1)
+    rows = np.zeros((len(dofs), X.shape[1]))
+    rows[owned] = X[dofs[owned] - r0]
+    matrix.getComm().tompi4py().Allreduce(MPI.IN_PLACE, rows, op=MPI.SUM)
+    return rows
 
 
 def unit_columns(dofs: np.ndarray, matrix) -> np.ndarray:
