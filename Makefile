@@ -9,9 +9,11 @@ FEMCONTACT := $(VENV)/bin/femcontact
 STAMPS := .stamps
 SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 RANKS ?= 2
+# Processes the serial tests run in (pytest-xdist): one per core, at most 4 (each takes up to 1.5 GB).
+TEST_WORKERS ?= $(shell n=$$(nproc); echo $$(( n < 4 ? n : 4 )))
 
 APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
-	python3-meshio python3-h5py python3-pytest python3-venv python3-pip python3-matplotlib \
+	python3-meshio python3-h5py python3-pytest python3-pytest-xdist python3-venv python3-pip python3-matplotlib \
 	openmpi-bin libopenblas0-pthread libgl1 libxrender1 libosmesa6 ffmpeg
 PIP_PACKAGES := "numpy<2" "pyvista>=0.45,<0.46" "vtk>=9.4,<9.5"
 
@@ -54,7 +56,7 @@ test: setup
 	$(MAKE) --no-print-directory test-serial test-mpi
 
 test-serial: setup
-	$(PY) -m pytest -q tests --ignore=tests/mpi --ignore=tests/slurm
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope tests --ignore=tests/mpi --ignore=tests/slurm
 
 test-mpi: setup
 	timeout 1200 mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider tests/mpi
