@@ -227,8 +227,8 @@ SOLVER = {
                             "off: factor the whole Jacobian every Newton iteration"),
     "linear": Field("str", "auto", "the linear solver: 'direct' (MUMPS LU; with `contact_update`, the bulk "
                     "factored once), 'iterative' (GMRES preconditioned by algebraic multigrid, a residual 1e-6 of "
-                    "the right-hand side's; memory about linear in the unknowns) or 'auto' (iterative from 150,000 "
-                    "unknowns, where it becomes the faster over a whole 3-D run; docs/bench.md)",
+                    "the right-hand side's; memory about linear in the unknowns) or 'auto' (iterative from 300,000 "
+                    "unknowns, where the direct solver's memory outgrows a workstation's; docs/bench.md)",
                     choices=("auto", "direct", "iterative")),
     "petsc_options": Field("any", {}, "PETSc options for the linear solver (prefix-free)",
                            check=lambda v: None if isinstance(v, dict) else "must be a table"),

@@ -42,12 +42,14 @@ DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_
 ITERATIVE_PETSC_OPTIONS = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "pc_type": "gamg",
                            "pc_gamg_reuse_interpolation": True, "ksp_rtol": 1e-6, "ksp_atol": 1e-14,
                            "ksp_max_it": 2000}
-ITERATIVE_DOFS = 150_000
-"""Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. On 3-D wedging on 2
-ranks the direct solver ran the whole scene at 109k unknowns in 43 s (103 Newton iterations),
-but at 288k its first 19 Newton iterations took 13 min with the update by columns alone: the
-contact set outgrew COLUMN_BYTES and every iteration factored the whole Jacobian again (`make
-bench_solvers`, `make convergence_3d`). By entries the update has not been timed at that size."""
+ITERATIVE_DOFS = 300_000
+"""Unknowns from which `solver.linear = 'auto'` chooses the iterative solver. The whole 3-D
+wedging scene at 288,213 unknowns on 2 ranks: direct (the bulk factored once, the contact by
+entries of the inverse, at most 417 contact dofs) 260 s, 121 Newton iterations, 4.5 GB a rank
+(1 rank: 413 s, 7.1 GB); iterative 899 s, 124 Newton iterations, 1.2 GB a rank; the same
+answers to 1e-9. Above, the direct solver's memory outgrows a workstation's (23 GB on 1 rank at
+447k, `make bench_solvers`), and a contact set past `MAX_RANK` factors the whole Jacobian again
+at every Newton iteration."""
 MAX_RANK = 2000
 """Largest contact set (dofs) the update takes: its dense (I + C G) is solved on every rank."""
 COLUMN_BYTES = 2e8
@@ -64,6 +66,13 @@ INVERSE_BLOCKING = 512
 """Columns of the inverse MUMPS computes together (its ICNTL(27)): on the 3-D Hertz contact at
 64,905 unknowns (2 ranks) 6.8 s for 1,954 dofs' columns in six batches against 8.4 s with
 MUMPS's own choice, 0.72 against 1.1 s at 43,674."""
+PARALLEL_ENTRIES_FROM = 64
+"""Fewest columns of the inverse asked of MUMPS as entries (ICNTL(30)) on more than one rank;
+fewer are solved as whole unit columns. On 2 ranks each call for entries costs seconds
+whatever it asks, a unit column 65 ms (3-D wedging at 288,213 unknowns: 10, 30, 100 and 300
+columns as entries 11.5, 4.5, 2.5 and 3.8 s, as whole columns 0.65, 1.7, 5.5 and 21.5 s;
+at 43,674 unknowns 638 columns 0.94 s against 4.9 s). On 1 rank entries are the cheaper at
+any count (0.39 s for 10 columns against 0.66 s)."""
 SYMMETRY = 1e-12
 """K_bulk counts as symmetric where |K_ij - K_ji| is at most this times its largest row sum (the
 assembled elastic and mass forms differ from their transposes by round-off, 1e-16 of it)."""
@@ -348,11 +357,12 @@ def _inverse_columns(ksp, dofs: np.ndarray, columns: np.ndarray, matrix) -> np.n
     F^-1 e_dof took 4.9 s. petsc4py 3.18 does not wrap the call; it is reached through the
     PETSc library petsc4py is linked to. MUMPS reads the requested pattern, the transpose of an
     AIJ matrix, on its host (rank 0) alone, from the host's diagonal part: all its rows and
-    columns live there. Other factorisation packages solve the dense unit columns."""
-    if ksp.getPC().getFactorSolverType() != "mumps":
-        return _rows_at(dofs, _mat_solve(ksp, list(unit_columns(columns, matrix).T), matrix), matrix)
+    columns live there. Fewer columns than `PARALLEL_ENTRIES_FROM` on more than one rank, and
+    other factorisation packages, solve the whole unit columns."""
     k, m = len(dofs), len(columns)
     comm, n_global = matrix.getComm(), matrix.getSize()[0]
+    if ksp.getPC().getFactorSolverType() != "mumps" or (comm.getSize() > 1 and m < PARALLEL_ENTRIES_FROM):
+        return _rows_at(dofs, _unit_solve(ksp, columns, matrix), matrix)
     host = comm.getRank() == 0
     counts = np.zeros(n_global if host else 0, dtype=PETSc.IntType)
     if host:
