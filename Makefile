@@ -9,8 +9,9 @@ FEMCONTACT := $(VENV)/bin/femcontact
 STAMPS := .stamps
 SUDO  := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 RANKS ?= 2
-# Processes the serial tests run in (pytest-xdist): one per core, at most 4 (each takes up to 1.5 GB).
-TEST_WORKERS ?= $(shell n=$$(nproc); echo $$(( n < 4 ? n : 4 )))
+# Processes the serial tests run in (pytest-xdist): one per core, at most 4 (each takes up to 1.5 GB;
+# nproc without OMP_NUM_THREADS, which it would report instead).
+TEST_WORKERS ?= $(shell n=$$(env -u OMP_NUM_THREADS nproc); echo $$(( n < 4 ? n : 4 )))
 
 APT_PACKAGES := python3-dolfinx python3-gmsh python3-petsc4py python3-mpi4py python3-scipy \
 	python3-meshio python3-h5py python3-pytest python3-pytest-xdist python3-venv python3-pip python3-matplotlib \
