@@ -1,0 +1,127 @@
+"""Where a run's solve time goes: every Newton solve of a scene, by how it ended.
+
+Runs a scene in this process with `SchurNewton.solve` wrapped to record each solve's outcome,
+Newton iterations and wall time, and sums them in three kinds: plain solves (no stabilisation
+spring on), the continuation's converged solves (the stabilised and the pseudo-transient
+continuation, a spring on) and the solves that failed (any kind; the stepper then tries the next
+way or cuts the increment). With `--slow` it does so for each slow converged case of the last
+`make stability` sweep (results/stability/stability.toml: the cases whose solve time exceeds 3x
+their neighbours') and writes results/stability/newton_solves.md.
+
+    python -m benchmarks.newton_solves scenes/wedging_2d.toml [--set KEY=VALUE ...]
+    python -m benchmarks.newton_solves --slow
+"""
+import argparse
+import contextlib
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import femcontact
+from benchmarks.stability import OUT, read_results, slow_cases
+from femcontact.config.scene import read_toml
+from femcontact.outputs.tables import markdown_table
+
+KINDS = ("plain", "continuation", "failed")
+
+
+@contextlib.contextmanager
+def recording(solves: list):
+    """Append (kind, Newton iterations, seconds) to `solves` for every `SchurNewton.solve` inside."""
+    from femcontact.solver import newton
+
+    solve = newton.SchurNewton.solve
+
+    def recorded(self, load, stiff_start: bool = False):
+        start = time.perf_counter()
+        try:
+            iterations = solve(self, load, stiff_start)
+        except newton.NewtonFailure as failure:
+            solves.append(("failed", max(len(failure.history) - 1, 0), time.perf_counter() - start))
+            raise
+        spring = bool(np.any(self.stabilization))
+        solves.append(("continuation" if spring else "plain", iterations, time.perf_counter() - start))
+        return iterations
+
+    newton.SchurNewton.solve = recorded
+    try:
+        yield solves
+    finally:
+        newton.SchurNewton.solve = solve
+
+
+def summary(solves: list) -> dict:
+    """{kind: (solves, Newton iterations, seconds)} of the recorded solves."""
+    return {kind: (sum(1 for k, _, _ in solves if k == kind), sum(n for k, n, _ in solves if k == kind),
+                   sum(s for k, _, s in solves if k == kind)) for kind in KINDS}
+
+
+def run_recorded(scene: dict) -> tuple[dict, object]:
+    """Run the resolved scene (in a scratch directory) recording its Newton solves: (summary, Result)."""
+    solves = []
+    with tempfile.TemporaryDirectory() as out, recording(solves):
+        result = femcontact.run(scene, out=out, quiet=True)
+    return summary(solves), result
+
+
+ROW_COLUMNS = ["case", "status", "solve (s)"] + [f"{kind}: solves / iterations / s" for kind in KINDS]
+
+
+def row(name: str, totals: dict, result) -> list:
+    return [name, result.status, result.timings.get("solve", 0.0)] + [
+        f"{n} / {its} / {seconds:.1f}" for n, its, seconds in (totals[kind] for kind in KINDS)]
+
+
+def slow_report() -> str:
+    """The breakdown of the last sweep's slow 2-D cases, each run again, and their sums."""
+    rows = read_toml(OUT / "stability.toml")["sweep"]["cases"]
+    results = read_results("stability", rows, Path(read_toml(OUT / "stability.toml")["study"]["scene"]))
+    table, sums = [], {kind: np.zeros(3) for kind in KINDS}
+    for cid, _, _ in slow_cases(results):
+        scene = results[cid][0]
+        totals, result = run_recorded(scene)
+        print(f"{cid}: " + ", ".join(f"{kind} {n} solves {its} iterations {s:.1f} s"
+                                     for kind, (n, its, s) in totals.items()), flush=True)
+        table.append(row(cid, totals, result))
+        for kind in KINDS:
+            sums[kind] += totals[kind]
+    seconds = sum(total[2] for total in sums.values()) or 1.0
+    lines = ["# Where the slow cases' solve time goes", "",
+             "`python -m benchmarks.newton_solves --slow`: the slow converged 2-D cases of the last "
+             "`make stability` sweep, each run again with its Newton solves recorded.", "",
+             *markdown_table(ROW_COLUMNS, table, formats=[None, None, "{:.1f}", None, None, None]), "",
+             f"All {len(table)} cases: " + "; ".join(
+                 f"{kind} {int(n)} solves, {int(its)} Newton iterations, {s:.1f} s ({100 * s / seconds:.0f} %)"
+                 for kind, (n, its, s) in sums.items()), ""]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.newton_solves", description=__doc__.splitlines()[0])
+    parser.add_argument("scene", nargs="?", help="a scene file")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a scene override")
+    parser.add_argument("--slow", action="store_true", help="the slow cases of the last `make stability` sweep")
+    args = parser.parse_args(argv)
+    if args.slow == bool(args.scene):
+        parser.error("give a scene file or --slow")
+    if args.slow:
+        text = slow_report()
+        (OUT / "newton_solves.md").write_text(text)
+        print(text)
+        print(f"written: {OUT / 'newton_solves.md'}")
+        return 0
+    totals, result = run_recorded(femcontact.load_scene(args.scene, args.set))
+    print(json.dumps({"status": result.status, "solve_s": result.timings.get("solve"),
+                      **{kind: dict(zip(("solves", "iterations", "seconds"), values)) for kind, values in totals.items()}}))
+    return 0
+
+
+if __name__ == "__main__":
+    from femcontact.process import quiet_logging
+
+    quiet_logging()
+    sys.exit(main())
