@@ -6,11 +6,11 @@ mesh resolutions RESOLUTIONS, its first load increment. Each (resolution, solver
 `mpirun -n R python -m benchmarks.solver_scaling --worker RES SOLVER` process: it meshes the
 scene, takes ITERATIONS Newton iterations (assembly, linear solves, line search) and reports
 the unknowns, the first iteration's time (with the factorisation or the multigrid set-up), the
-mean time of the later ones, the residual they reach (the solvers must agree on it) and the
-peak memory summed over the ranks. The exponent p of time ~ n^p (and of memory) is fitted by
-least squares over the rungs from FIT_FROM unknowns, and the goals are checked. A rung whose
-memory, predicted from the last smaller one, exceeds what the machine has available is
-skipped with a message (the direct solver at 1M unknowns).
+mean time of the later ones and of their parts (`PARTS`), the residual they reach (the solvers
+must agree on it) and the peak memory summed over the ranks. The exponent p of time ~ n^p (and
+of memory) is fitted by least squares over the rungs from FIT_FROM unknowns, and the goals are
+checked. A rung whose memory, predicted from the last smaller one, exceeds what the machine has
+available is skipped with a message (the direct solver at 1M unknowns).
 Writes results/bench/solvers.md and solvers.json, a row at a time (a killed run keeps the rows
 it measured; a new measurement replaces its row).
 
@@ -50,6 +50,11 @@ SPEEDUP_FROM = 200_000
 MEMORY_GROWTH = 1.7
 """Exponent of memory ~ n^p by which a rung is skipped when its predicted memory exceeds what is
 available (the direct solver's measured 1.66 from 109k to 447k unknowns on one rank)."""
+PARTS = ("factor or update", "linear solves", "residual assemblies")
+"""The parts of a later Newton iteration timed apart (the slowest rank's; the rest is the
+Jacobian's assembly, the rigid rows and the dense Schur step): the linear solver's `factor` (the
+direct solver's contact update, or the multigrid set-up), its `solve` calls and the residual
+assemblies (one per line-search trial)."""
 LOAD_STEP = {"name": "load", "increments": 1, "moment": [0.0, -200.0, 0.0]}
 """The timed increment: a fifth of the scene's moment, in one increment."""
 
@@ -73,8 +78,23 @@ def measure(resolution: float, solver: str) -> dict:
     simulation.problem.begin_increment(load)
     simulation.prescribe(load)
     residual = newton.assemble_residual(load)
+    parts, later = dict.fromkeys(PARTS, 0.0), [False]
+
+    def timed(function, part):  # adds the call's time to `part` during the later iterations
+        def call(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                parts[part] += (time.perf_counter() - start) if later[0] else 0.0
+        return call
+
+    newton.linear.factor = timed(newton.linear.factor, "factor or update")
+    newton.linear.solve = timed(newton.linear.solve, "linear solves")
+    newton.assemble_residual = timed(newton.assemble_residual, "residual assemblies")
     times = []
-    for _ in range(ITERATIONS):
+    for iteration in range(ITERATIONS):
+        later[0] = iteration > 0
         comm.barrier()
         start = time.perf_counter()
         du, dr = newton.direction(load, residual[0], residual[1])
@@ -84,7 +104,8 @@ def measure(resolution: float, solver: str) -> dict:
     memory = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, op=MPI.SUM)
     return {"resolution": resolution, "solver": solver, "ranks": comm.size,
             "dofs": simulation.dofs, "setup": setup, "first": times[0], "next": sum(times[1:]) / (len(times) - 1),
-            "residual": float(newton.norm(residual[0], residual[1])), "memory": memory}
+            "residual": float(newton.norm(residual[0], residual[1])), "memory": memory,
+            "parts": {part: comm.allreduce(seconds, op=MPI.MAX) / (ITERATIONS - 1) for part, seconds in parts.items()}}
 
 
 def run(resolution: float, solver: str, ranks: int) -> dict | None:
@@ -171,6 +192,13 @@ def report(rows: list[dict]) -> str:
             p = exponent(rungs, "memory")
             if p is not None:
                 lines.append(f"- {solver}, {ranks} rank(s), memory ~ n^{p:.2f}")
+    timed = [r for r in rows if "parts" in r]
+    if timed:
+        lines += ["", "A later Newton iteration by part (s, the slowest rank's; the rest: the Jacobian's assembly, "
+                  "the rigid rows and the dense Schur step):", "",
+                  *markdown_table(["solver", "ranks", "unknowns", "later iteration", *PARTS],
+                                  [[r["solver"], r["ranks"], r["dofs"], f"{r['next']:.2f}",
+                                    *(f"{r['parts'][part]:.2f}" for part in PARTS)] for r in timed])]
     table = goals(rows)
     if table:
         lines += ["", *markdown_table(["goal", "measured", "ratio to goal", "holds"], table)]

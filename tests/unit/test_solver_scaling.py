@@ -1,7 +1,8 @@
 """The solver-scaling benchmark (benchmarks/solver_scaling.py, `make bench_solvers`) on a coarse
 mesh: both linear solvers take the same Newton iterations to the same residual (the iterative
 one to its tolerance, 1e-6 of the right-hand side), and the fitted exponent is the slope of
-log time against log unknowns; a rung's memory is predicted from the last smaller one."""
+log time against log unknowns; the parts of a later iteration lie within it; a rung's memory
+is predicted from the last smaller one."""
 import math
 
 import pytest
@@ -15,8 +16,11 @@ def test_direct_and_iterative_reach_the_same_residual():
     assert direct["dofs"] == iterative["dofs"] > 1000
     assert iterative["residual"] == pytest.approx(direct["residual"], rel=1e-5)
     assert direct["memory"] > 0 and iterative["first"] > 0 and iterative["next"] > 0
+    for row in (direct, iterative):  # the parts timed apart lie within a later iteration
+        assert set(row["parts"]) == set(solver_scaling.PARTS)
+        assert 0 < sum(row["parts"].values()) <= row["next"]
     text = solver_scaling.report([direct, iterative])
-    assert text.count(f"| {direct['dofs']} |") == 2
+    assert text.count(f"| {direct['dofs']} |") == 4  # the table and the parts' table
 
 
 def test_the_exponent_is_the_slope_in_log_log():
