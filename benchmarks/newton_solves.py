@@ -78,8 +78,8 @@ def row(name: str, totals: dict, result) -> list:
 
 def slow_report() -> str:
     """The breakdown of the last sweep's slow 2-D cases, each run again, and their sums."""
-    rows = read_toml(OUT / "stability.toml")["sweep"]["cases"]
-    results = read_results("stability", rows, Path(read_toml(OUT / "stability.toml")["study"]["scene"]))
+    study = read_toml(OUT / "stability.toml")
+    results = read_results("stability", study["sweep"]["cases"], Path(study["study"]["scene"]))
     table, sums = [], {kind: np.zeros(3) for kind in KINDS}
     for cid, _, _ in slow_cases(results):
         scene = results[cid][0]

@@ -78,7 +78,7 @@ def measure(resolution: float, solver: str) -> dict:
     simulation.problem.begin_increment(load)
     simulation.prescribe(load)
     residual = newton.assemble_residual(load)
-    parts, later = dict.fromkeys(PARTS, 0.0), [False]
+    parts, later = dict.fromkeys(PARTS, 0.0), False
 
     def timed(function, part):  # adds the call's time to `part` during the later iterations
         def call(*args, **kwargs):
@@ -86,7 +86,8 @@ def measure(resolution: float, solver: str) -> dict:
             try:
                 return function(*args, **kwargs)
             finally:
-                parts[part] += (time.perf_counter() - start) if later[0] else 0.0
+                if later:
+                    parts[part] += time.perf_counter() - start
         return call
 
     newton.linear.factor = timed(newton.linear.factor, "factor or update")
@@ -94,7 +95,7 @@ def measure(resolution: float, solver: str) -> dict:
     newton.assemble_residual = timed(newton.assemble_residual, "residual assemblies")
     times = []
     for iteration in range(ITERATIONS):
-        later[0] = iteration > 0
+        later = iteration > 0
         comm.barrier()
         start = time.perf_counter()
         du, dr = newton.direction(load, residual[0], residual[1])
