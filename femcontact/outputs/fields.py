@@ -128,8 +128,8 @@ class Fields:
         lumped = np.where(area > 0, values / np.where(area > 0, area, 1.0), 0.0)
         pressure, gap, stick, slip = lumped[:, :4].T
         tangential, xi, normal = np.split(lumped[:, 4:-1], 3, axis=1)
-        # touching: a positive lumped pressure (with quadratic elements or in 3-D the contact is integrated at
-        # Gauss points, so a node at the edge of the contact zone may be touched on a part of its patch only)
+        # touching: a positive lumped pressure (the lumped value averages the node's patch, so a node
+        # at the edge of the contact zone may be touched on a part of its patch only)
         status = np.where(pressure > 0, np.where(self.friction & (stick > slip), 1.0, 2.0), 0.0)
         normal = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
         return {"contact_pressure": pressure, "gap": gap, "contact_status": status,

@@ -31,6 +31,12 @@ EXACT_SURFACE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], 
 """Contact points on a reference triangle (area 1/2) for exact surfaces: the vertex rule on the four
 triangles that halve its edges (`VERTEX_RULE` on each), so the points are the nodes of a
 quadratic triangle."""
+P2_NODE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5],
+                                      [1 / 3, 1 / 3]],
+                "quadrature_weights": [1 / 40] * 3 + [1 / 15] * 3 + [9 / 40]}
+"""Contact points on a reference triangle (area 1/2) for 3-D P2 facets: its six nodes and its
+centroid, positive weights, exact for cubics. A sharp edge of the contact surface lies on nodes,
+so its contact is seen where Gauss points inside the facets would let it penetrate."""
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 
 
@@ -117,13 +123,14 @@ class Problem:
                      jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du))
 
     def _contact_measure(self, degree: int):
-        """Contact terms use a fixed rule, so the residual and its derivatives integrate alike.
-        In 2-D it is Gauss-Lobatto on the element nodes (node-to-surface contact: a
-        penetrating corner node is seen at once); basix has no such rule on triangles, so
-        3-D P1 uses the facet's vertices as a custom rule (`VERTEX_RULE`; the nodes also lie on the exact
-        curved surface, the facets' interior does not) and 3-D P2 Gauss points of degree 2p + 2.
-        On exact surfaces (`contact.surface = "exact"`, 3-D P1) the points are the vertices and
-        edge midpoints, each facet's vertex rule on its four halved triangles (`EXACT_SURFACE_RULE`)."""
+        """Contact terms use a fixed rule, so the residual and its derivatives integrate alike,
+        with points on the element nodes (node-to-surface contact: a penetrating corner or edge
+        node is seen at once). In 2-D it is Gauss-Lobatto; basix has no such rule on triangles,
+        so in 3-D the rules are custom: P1 the facet's vertices (`VERTEX_RULE`; the nodes also lie
+        on the exact curved surface, the facets' interior does not), P2 its nodes and centroid
+        (`P2_NODE_RULE`), and on exact surfaces (`contact.surface = "exact"`, 3-D P1) the vertices
+        and edge midpoints, each facet's vertex rule on its four halved triangles
+        (`EXACT_SURFACE_RULE`)."""
         if self.dim == 2:
             quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
         elif self.scene["contact"]["surface"] == "exact":
@@ -131,7 +138,7 @@ class Problem:
         elif degree == 1:
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **VERTEX_RULE}
         else:
-            quadrature = {"quadrature_degree": 2 * degree + 2}
+            quadrature = {"quadrature_rule": "custom", "quadrature_degree": 3, **P2_NODE_RULE}
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.model.facet_tags, metadata=quadrature)
         return ds(tuple(self.model.facets[name] for name in self.model.contact_facets))
 

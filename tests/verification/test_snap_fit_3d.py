@@ -3,7 +3,7 @@ its 1 mm width (quadratic tetrahedra, 2 across the thickness, 4 layers across th
 blade pin whose flat-taper section is the same in every plane z = const. The checks of the 2-D
 scene hold with forces in N over the whole width: the flat taper's force ratio equals the statics
 of a sliding interface (alpha from the insertion axis, phi = atan(mu)), and the spring's lateral
-stiffness is cantilever theory with the spring's width b: 3EI/L^3 = E b h^3 / (4 L^3)."""
+stiffness lies between beam theory with the spring's width b and a wide plate strip's."""
 import math
 from pathlib import Path
 
@@ -36,17 +36,39 @@ def test_3d_flat_taper_force_ratio_equals_statics():
     assert m["insertion_force"][-1] == pytest.approx(0.2 * m["final_contact_force"], rel=1e-3)
 
 
-def test_3d_lateral_stiffness_is_cantilever_theory():
-    """Frictionless: the force on the shank over the interference (0.15 mm = 3 % of L) against
-    Timoshenko's tip stiffness (3EI/L^3 with shear) of a beam of the spring's width b = 1 mm,
-    within 0.5 % (measured: +0.1 %; 3EI/L^3 alone is 0.3 % stiffer)."""
-    m = simulate(["effects=[]", "steps.0.motion.y=-0.34", "steps.0.increments=3", "steps.1.motion.y=-0.34",
-                  "steps.1.increments=1"])
-    scene = load_scene(SCENE)
+def test_3d_lateral_stiffness_lies_between_beam_and_plate_strip_with_the_apex_on_the_shank():
+    """Frictionless: the force on the shank over the interference (0.15 mm = 3 % of L) lies between
+    Timoshenko's tip stiffness of a beam of the spring's width b = 1 mm (3EI/L^3 with shear: plane
+    stress, which the 2-D plane-stress scene reproduces to 0.03 %) and the same over 1 - nu^2 (an
+    infinitely wide strip, plane strain, +9.9 %): a strip 3.3 thicknesses wide whose clamped root
+    holds its Poisson contraction (measured +1.5 % on this mesh, +1.4 % at resolution 2). The apex,
+    a sharp edge of the spring, stays on the shank to the penalty's overclosure (measured 1e-4 of
+    the interference): the contact is integrated at the facets' nodes, where Gauss points inside
+    the facets let it sink by 1.7 % of the interference on this mesh."""
+    import numpy as np
+
+    from femcontact.families.snap_fit.metrics import snap_fit_metrics
+    from femcontact.solver.stepping import Simulation
+    from geometry.snap_fit import layout
+
+    overrides = ["effects=[]", "steps.0.motion.y=-0.34", "steps.0.increments=3", "steps.1.motion.y=-0.34",
+                 "steps.1.increments=1"]
+    scene = load_scene(SCENE, overrides)
+    simulation = Simulation(scene)
+    simulation.run()
+    m = snap_fit_metrics(simulation)
     spring, material = scene["spring"], scene["materials"]["spring"]
     k = reference.timoshenko_stiffness(material["E"], material["nu"], spring["thickness"], spring["length"],
                                        spring["width"])
-    assert m["final_contact_force"] / spring["interference"] == pytest.approx(k, rel=5e-3)
+    stiffness = m["final_contact_force"] / spring["interference"]
+    assert k < stiffness < k / (1 - material["nu"] ** 2)
     assert m["stiffness_3EI_L3"] == pytest.approx(material["E"] * spring["width"] * spring["thickness"] ** 3
                                                   / (4 * spring["length"] ** 3))
     assert m["insertion_force"][-1] == pytest.approx(0.0, abs=1e-6)
+
+    u = simulation.problem.u
+    n, bs = u.function_space.dofmap.index_map.size_local, u.function_space.dofmap.index_map_bs
+    x = u.function_space.tabulate_dof_coordinates()[:n]
+    apex = np.all(np.isclose(x[:, :2], layout(scene).apex, rtol=0, atol=1e-9), axis=1)
+    sunk = scene["peg"]["width"] / 2 - (x[apex, 0] + u.x.array[: n * bs].reshape(-1, bs)[apex, 0])
+    assert apex.sum() >= 2 and sunk.max() < 1e-3 * spring["interference"]
