@@ -57,3 +57,23 @@ def test_forms_compiled_together_come_from_one_module(forms, monkeypatch):
     monkeypatch.setattr(ffcx.codegeneration.jit, "compile_forms", counted)
     compile_forms(forms)
     assert calls == [len(forms)]  # one FFCx module for all of them (on every rank)
+
+
+def test_a_lock_left_by_a_killed_compile_is_cleared(tmp_path):
+    """A C file without its ready marker older than STALE_LOCK_SECONDS is a killed process's lock
+    and goes; one with its marker, or one still young (a compile under way), stays."""
+    import os
+    import time
+
+    from femcontact.jit import STALE_LOCK_SECONDS, clear_stale_locks
+
+    now = time.time()
+    old = now - 2 * STALE_LOCK_SECONDS
+    killed, compiled, young = (tmp_path / f"libffcx_forms_{name}.c" for name in ("killed", "compiled", "young"))
+    for path in (killed, compiled, young):
+        path.write_text("")
+    (tmp_path / "libffcx_forms_compiled.c.cached").write_text("")
+    for path in (killed, compiled):
+        os.utime(path, (old, old))
+    assert clear_stale_locks(tmp_path, now) == [killed]
+    assert not killed.exists() and compiled.exists() and young.exists()
