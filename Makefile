@@ -135,7 +135,7 @@ bench_hertz_3d: setup
 bench_solvers: setup
 	$(PY) -m benchmarks.solver_scaling
 
-# The 3-D wedging, insertion and snap-fit answers on ladders of meshes (resolution 1 to 2.83, 2 ranks)
+# The 3-D wedging, insertion and snap-fit answers on ladders of meshes (resolution 1 to 4; P2 0.5 to 1.41; 2 ranks)
 # with their Richardson extrapolation and discretisation error: results/convergence_3d/convergence_3d.md
 convergence_3d: setup
 	$(PY) -m benchmarks.convergence_3d

@@ -6,7 +6,9 @@ resolutions each sqrt(2) finer than the last (element sizes / sqrt(2), about 2.8
 scenes/wedging_3d.toml (a rigid peg wedged in a stainless block by a 1000 N mm couple, then
 released), scenes/insertion_3d.toml (a tilted peg with a rounded rim on compliant springs, into
 two-point contact), both also with the contact on the hole's exact surface (`contact.surface =
-"exact"`), and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
+"exact"`), the wedging also with quadratic elements on the exact surface (`mesh.degree = 2`,
+resolutions 0.5 to 1.41), and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring
+and withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
 extrapolation of the three finest (`femcontact.references.richardson`) with its observed order,
 the estimated error of the finest rung, |finest - extrapolated| / |extrapolated|, and the spread
 of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
@@ -84,6 +86,9 @@ LADDERS = {"wedging_3d": WEDGING,
            "insertion_3d": INSERTION,
            "insertion_3d_exact": replace(INSERTION, settings=EXACT,
                                          title="3-D insertion on the exact hole surface under mesh refinement"),
+           "wedging_3d_p2_exact": replace(WEDGING, settings={**EXACT, "mesh.degree": "2"},
+                                          resolutions=(0.5, 0.5 * 2 ** 0.5, 1.0, 2 ** 0.5), order_limit=3.0,
+                                          title="3-D wedging at P2 on the exact hole surface under mesh refinement"),
            "snap_fit_3d": SNAP_FIT}
 
 

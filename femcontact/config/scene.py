@@ -149,9 +149,10 @@ CONTACT = {
     "gamma_t": Field("float", 0.0, "tangential parameter gamma_T = gamma_t * E / h; 0 = same as gamma", min=0.0),
     "theta": Field("float", 0.0, "Nitsche variant: 1 symmetric, 0 skew-less, -1 skew-symmetric",
                    choices=(-1.0, 0.0, 1.0)),
-    "surface": Field("str", "facets", "where the contact is measured in 3-D P1: 'facets' (the mesh's flat "
-                     "facets, at their vertices) or 'exact' (a round hole's wall and chamfer facets moved onto the "
-                     "exact cylinder and cone, at the facets' vertices and edge midpoints; docs/wedging_3d.md)",
+    "surface": Field("str", "facets", "where the contact is measured in 3-D: 'facets' (the mesh's flat "
+                     "facets, at their nodes) or 'exact' (a round hole's wall and chamfer facets moved onto the "
+                     "exact cylinder and cone, at the facets' vertices and edge midpoints, with P2 also their "
+                     "centroids; docs/wedging_3d.md)",
                      choices=("facets", "exact")),
 }
 
@@ -329,11 +330,10 @@ def check_contact(scene: dict) -> None:
         problems.append(f"effects = {effects}: plane_strain/plane_stress are 2-D effects (dim = 3)")
     if "plasticity" in effects and "large_strain" in effects:
         problems.append(f"effects = {effects}: 'plasticity' is small-strain (drop 'large_strain')")
-    round_hole = (dim, scene["geometry"], scene.get("rigid"), scene["mesh"]["degree"]) == (3, "peg_in_hole", "peg", 1)
+    round_hole = (dim, scene["geometry"], scene.get("rigid")) == (3, "peg_in_hole", "peg")
     if scene["contact"]["surface"] == "exact" and not round_hole:
         problems.append(f"contact.surface = 'exact': for the round hole of a 3-D peg_in_hole scene with a rigid peg "
-                        f"on P1 elements (dim = {dim}, geometry = {scene['geometry']!r}, rigid = {scene.get('rigid')!r}, "
-                        f"mesh.degree = {scene['mesh']['degree']})")
+                        f"(dim = {dim}, geometry = {scene['geometry']!r}, rigid = {scene.get('rigid')!r})")
     table, body = scene["plasticity"]["hardening"], deformable_body(scene)
     if "plasticity" in effects and table and table[0][1] != scene["materials"][body]["yield_stress"]:
         problems.append(f"plasticity.hardening = {table}: its first yield stress must be "

@@ -12,10 +12,11 @@ the bound mu p differ between the two facets that meet at a node (the Nitsche pr
 uses each element's own stress), and a facet's anchor must hold that facet's traction for
 the next increment to start exactly where the last one converged. With the contact rules
 that integrate at the nodes (2-D, and 3-D P1) this holds to round-off, except at a node
-shared by two contact facets of one element, where the anchor holds their average. The field
+shared by two contact facets of one element, where the anchor holds their average; 3-D P2
+adds each facet's centroid, whose anchor is interpolated from the element's nodes. The field
 lives on every element (DOLFINx 0.5 has no function space on facets): d numbers per node of
 each element, in 3-D P1 about 24 per mesh vertex. On exact surfaces (`contact.surface`) the
-contact points include the edge midpoints: the anchors are quadratic there, one per point.
+contact points include the edge midpoints: the anchors are quadratic there, one per node.
 """
 import numpy as np
 import ufl
@@ -47,8 +48,8 @@ class Friction(Effect):
     def build(self, problem) -> None:
         c, rigid, contact = problem.constants, problem.rigid, problem.contact
         degree = problem.scene["mesh"]["degree"]
-        exact = problem.scene["contact"]["surface"] == "exact"  # contact points on edge midpoints too
-        self.W = fem.VectorFunctionSpace(problem.mesh, ("DG", degree + 1 if exact else degree))
+        exact = problem.scene["contact"]["surface"] == "exact"  # contact points on edge midpoints too (P1)
+        self.W = fem.VectorFunctionSpace(problem.mesh, ("DG", max(degree, 2) if exact else degree))
         self.anchor = fem.Function(self.W, name="anchor")
         if exact:  # the points where the contact is measured, moved onto the exact surface
             self._position = fem.Expression(contact.xi, self.W.element.interpolation_points())

@@ -133,7 +133,7 @@ class Problem:
         (`EXACT_SURFACE_RULE`)."""
         if self.dim == 2:
             quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
-        elif self.scene["contact"]["surface"] == "exact":
+        elif degree == 1 and self.scene["contact"]["surface"] == "exact":
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **EXACT_SURFACE_RULE}
         elif degree == 1:
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": 1, **VERTEX_RULE}

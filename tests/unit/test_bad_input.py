@@ -146,7 +146,7 @@ DISLODGING = str(SCENES / "dislodging_2d.toml")
     (DISLODGING, ["dislodging.rotation_stiffness=1e5"], "dislodging.rotation_stiffness = 100000: a gripper spring"),
     (DISLODGING, ["dislodging.rotation='spring'", "dislodging.rotation_stiffness=-1"], "dislodging.rotation_stiffness = -1"),
     (INSERTION, ["contact.surface='exact'"], "contact.surface = 'exact': for the round hole of a 3-D peg_in_hole "
-                                             "scene with a rigid peg on P1 elements (dim = 2"),
+                                             "scene with a rigid peg (dim = 2"),
     (INSERTION, ["contact.surface='round'"], "contact.surface = 'round'"),
 ], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
         "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments",
