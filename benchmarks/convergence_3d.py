@@ -153,7 +153,8 @@ def report(name: str, rows: list[dict]) -> str:
     if table:
         lines += [*markdown_table(["quantity", "finest rung", "extrapolated", "observed order",
                                    "estimated error of the finest", f"<= {TARGET:.0%}", "spread of the three finest"],
-                                  [[t["meaning"], f"{t['finest']:.6g}", f"{t['limit']:.6g}", f"{t['order']:.2f}",
+                                  [[t["meaning"], f"{t['finest']:.6g}", f"{t['limit']:.6g}",
+                                    f"{t['order']:.2f}" if math.isfinite(t["order"]) else "- (not monotone)",
                                     f"{t['error']:.2%}" if t["error"] is not None else t["why_none"],
                                     "yes" if t["error"] is not None and t["error"] <= TARGET else "no",
                                     f"{t['spread']:.2%}" if t["spread"] is not None else "-"]

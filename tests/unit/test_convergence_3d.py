@@ -1,6 +1,8 @@
 """The 3-D convergence report (benchmarks/convergence_3d.py, `make convergence_3d`) on made-up
 rungs: a quantity f(h) = f0 + C h^2 on meshes refined by sqrt(2) is extrapolated to f0 with
 order 2, and the finest rung's error is |f(h_finest) - f0| / f0; a failed rung is left out."""
+import math
+
 import pytest
 
 from benchmarks import convergence_3d
@@ -60,3 +62,17 @@ def test_an_order_above_the_discretisations_gives_no_error_estimate():
     table = convergence_3d.extrapolation("wedging_3d", rows(order=3.0))  # P1 contact delivers 2 at most
     assert all(entry["error"] is None for entry in table)
     assert "| order above 2 | no |" in convergence_3d.report("wedging_3d", rows(order=3.0))
+
+
+def test_rungs_that_alternate_get_no_order_even_when_their_steps_shrink():
+    """Steps of opposite sign (here -0.78 then +0.39: |ratio| 1/2) are no convergence to
+    extrapolate, whatever their sizes: the finest value, no order, no error estimate."""
+    from femcontact.references.richardson import richardson
+
+    limit, order = richardson([66.44, 65.66, 66.05], 2 ** 0.5)
+    assert limit == 66.05 and math.isnan(order)
+    data = rows()
+    for row, value in zip(data, (66.44, 65.66, 67.34, 66.50)):  # P2 on the exact surface, docs/wedging_3d.md
+        row["residual_force_A"] = value
+    entry = convergence_3d.extrapolation("wedging_3d", data)[0]
+    assert entry["error"] is None and entry["why_none"] == "not converging"
