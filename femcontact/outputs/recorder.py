@@ -97,9 +97,9 @@ class Recorder:
         every cell with one contact facet (its stress on that facet's normal), averaged over those
         cells at each node, then [.]_+. Lumped to P1 vertices (`nodal_values`), the pressure of a
         quadratic displacement is smeared over a vertex's patch and moves the contact zone's edge
-        outwards by up to an element; here the edge stays where the
-        pressure's argument changes sign. A node whose cells each have several contact facets (a
-        corner) has no value and is left out."""
+        outwards by up to an element; here the edge stays where the pressure's argument changes
+        sign. A node whose cells each have several contact facets (a corner) has no value and is
+        left out."""
         if self._recovery is None:
             self._recovery = _PressureRecovery(self.problem, self.contact_facets, self.contact_nodes)
         return self._recovery()

@@ -128,9 +128,9 @@ class Problem:
         node is seen at once). In 2-D it is Gauss-Lobatto; basix has no such rule on triangles,
         so in 3-D the rules are custom: P1 the facet's vertices (`VERTEX_RULE`; the nodes also lie
         on the exact curved surface, the facets' interior does not), P2 its nodes and centroid
-        (`P2_NODE_RULE`), and on exact surfaces (`contact.surface = "exact"`, 3-D P1) the vertices
-        and edge midpoints, each facet's vertex rule on its four halved triangles
-        (`EXACT_SURFACE_RULE`)."""
+        (`P2_NODE_RULE`, on exact surfaces too). On P1's exact surfaces (`contact.surface =
+        "exact"`) the points are the vertices and edge midpoints, each facet's vertex rule on its
+        four halved triangles (`EXACT_SURFACE_RULE`)."""
         if self.dim == 2:
             quadrature = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}
         elif degree == 1 and self.scene["contact"]["surface"] == "exact":
