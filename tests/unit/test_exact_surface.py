@@ -40,7 +40,8 @@ def radial_error(problem, x, name: str) -> float:
         angle = np.radians(hole["chamfer_angle"])
         h_c = hole["chamfer_width"] / np.tan(angle)
         exact = hole["width"] / 2 + (x[2] + h_c) * np.tan(angle)
-    ds = ufl.Measure("ds", domain=problem.mesh, subdomain_data=model.facet_tags, metadata=RULES[scene["mesh"]["degree"]])(model.facets[name])
+    rule = RULES[scene["mesh"]["degree"]]
+    ds = ufl.Measure("ds", domain=problem.mesh, subdomain_data=model.facet_tags, metadata=rule)(model.facets[name])
     comm = problem.mesh.comm
     square = comm.allreduce(fem.assemble_scalar(fem.form((r - exact) ** 2 * ds)), op=MPI.SUM)
     area = comm.allreduce(fem.assemble_scalar(fem.form(1.0 * ds)), op=MPI.SUM)

@@ -16,13 +16,19 @@ SCENE = Path(__file__).parents[2] / "scenes" / "snap_fit_3d.toml"
 SHORT = ["steps.0.motion.y=-0.34", "steps.0.increments=10"]  # 0.05 gap, 0.26 on the taper, 0.03 on the shank
 
 
-def simulate(overrides: list[str]) -> dict:
-    from femcontact.families.snap_fit.metrics import snap_fit_metrics
+def run(overrides: list[str]):
+    """The scene with `overrides`, run to its end."""
     from femcontact.solver.stepping import Simulation
 
     simulation = Simulation(load_scene(SCENE, overrides))
     simulation.run()
-    return snap_fit_metrics(simulation)
+    return simulation
+
+
+def simulate(overrides: list[str]) -> dict:
+    from femcontact.families.snap_fit.metrics import snap_fit_metrics
+
+    return snap_fit_metrics(run(overrides))
 
 
 def test_3d_flat_taper_force_ratio_equals_statics():
@@ -48,15 +54,11 @@ def test_3d_lateral_stiffness_lies_between_beam_and_plate_strip_with_the_apex_on
     import numpy as np
 
     from femcontact.families.snap_fit.metrics import snap_fit_metrics
-    from femcontact.solver.stepping import Simulation
     from geometry.snap_fit import layout
 
-    overrides = ["effects=[]", "steps.0.motion.y=-0.34", "steps.0.increments=3", "steps.1.motion.y=-0.34",
-                 "steps.1.increments=1"]
-    scene = load_scene(SCENE, overrides)
-    simulation = Simulation(scene)
-    simulation.run()
-    m = snap_fit_metrics(simulation)
+    simulation = run(["effects=[]", "steps.0.motion.y=-0.34", "steps.0.increments=3", "steps.1.motion.y=-0.34",
+                      "steps.1.increments=1"])
+    scene, m = simulation.problem.scene, snap_fit_metrics(simulation)
     spring, material = scene["spring"], scene["materials"]["spring"]
     k = reference.timoshenko_stiffness(material["E"], material["nu"], spring["thickness"], spring["length"],
                                        spring["width"])
@@ -66,9 +68,8 @@ def test_3d_lateral_stiffness_lies_between_beam_and_plate_strip_with_the_apex_on
                                                   / (4 * spring["length"] ** 3))
     assert m["insertion_force"][-1] == pytest.approx(0.0, abs=1e-6)
 
-    u = simulation.problem.u
-    n, bs = u.function_space.dofmap.index_map.size_local, u.function_space.dofmap.index_map_bs
-    x = u.function_space.tabulate_dof_coordinates()[:n]
+    newton = simulation.newton  # the owned nodes' coordinates and displacements
+    x, u = newton.coordinates, simulation.problem.u.x.array[: newton.n_owned * 3].reshape(-1, 3)
     apex = np.all(np.isclose(x[:, :2], layout(scene).apex, rtol=0, atol=1e-9), axis=1)
-    sunk = scene["peg"]["width"] / 2 - (x[apex, 0] + u.x.array[: n * bs].reshape(-1, bs)[apex, 0])
+    sunk = scene["peg"]["width"] / 2 - (x[apex, 0] + u[apex, 0])
     assert apex.sum() >= 2 and sunk.max() < 1e-3 * spring["interference"]
