@@ -8,12 +8,13 @@ A measured block of a page in docs/ (or README.md) is fenced by two lines:
 
 and names a results file, optionally one of its sections (`#` and the heading's text: the lines
 under that heading up to the next heading of the same or a higher level). Each block is replaced
-by the current content of what it names; a block whose results file is missing is left as it is
-and reported with the make target that writes the file (`make DIR` for results/DIR/, e.g.
-`make bench`, `make stability`, `make wedging`). docs/scenes.md is written from the schemas as
-`python -m femcontact.families.docs` writes it. A marker left open, an end without a start or a
-section the results file lacks is an error naming the page and line (exit 2), and then no page is
-written; each page is written atomically, so none is ever half written.
+by the current content of what it names; a block whose results file, or section of it, is missing
+is left as it is and reported with the make target that writes the file (`make DIR` for
+results/DIR/, e.g. `make bench`, `make stability`, `make wedging`): a target run for part of its
+work (`make convergence_3d` for one ladder) writes only the sections of that part.
+docs/scenes.md is written from the schemas as `python -m femcontact.families.docs` writes it. A
+marker left open or an end without a start is an error naming the page and line (exit 2), and
+then no page is written; each page is written atomically, so none is ever half written.
 
     python -m benchmarks.docs_update [--root DIR]
 """
@@ -37,7 +38,7 @@ class Update:
     written: list = field(default_factory=list)
     updated: list = field(default_factory=list)  # (page, results reference)
     unchanged: list = field(default_factory=list)
-    missing: dict = field(default_factory=dict)  # results path -> make target
+    missing: dict = field(default_factory=dict)  # results path (#section) -> make target
 
     def lines(self) -> list[str]:
         return ([f"updated {page}: {source}" for page, source in self.updated]
@@ -51,8 +52,9 @@ def pages(root: Path) -> list[Path]:
     return sorted((root / "docs").glob("*.md")) + [path for path in [root / "README.md"] if path.exists()]
 
 
-def section(text: str, heading: str, source: str) -> str:
-    """The lines under `heading` in a results file's text, up to the next heading of its level or above."""
+def section(text: str, heading: str) -> str | None:
+    """The lines under `heading` in a results file's text, up to the next heading of its level or
+    above; None when the text has no such heading."""
     lines = text.splitlines()
     for start, line in enumerate(lines):
         match = HEADING.match(line)
@@ -64,7 +66,7 @@ def section(text: str, heading: str, source: str) -> str:
                     break
                 body.append(line)
             return "\n".join(body)
-    raise InputError(f"{source}: no section {heading!r}")
+    return None
 
 
 def make_target(results_path: str, root: Path) -> str:
@@ -104,14 +106,14 @@ def refresh(page: Path, root: Path, update: Update) -> str | None:
             _, path, heading, old = block
             source = path + (f"#{heading}" if heading else "")
             new = old
-            if (root / path).is_file():
-                content = (root / path).read_text()
-                body = section(content, heading, path) if heading else content
+            content = (root / path).read_text() if (root / path).is_file() else None
+            body = section(content, heading) if heading and content is not None else content
+            if body is not None:
                 new = [""] + body.strip("\n").split("\n") + [""]
                 (update.updated if new != old else update.unchanged).append((name, source))
                 changed |= new != old
             else:
-                update.missing[path] = make_target(path, root)
+                update.missing[source] = make_target(path, root)
             out += new + [line]
             block = None
         elif block is not None:
