@@ -4,7 +4,7 @@ Reactions come from the assembled residual at the support dofs (variationally
 consistent, so they balance the rigid body's load to solver tolerance); contact
 resultants from the contact residual, per zone (A: x < 0, B: x > 0 for a peg in a
 hole or the springs of a snap fit, one zone `top` for a block); nodal contact pressure and stick/slip states
-from boundary integrals lumped to the P1 nodes of the contact surface.
+from boundary integrals at the displacement's nodes, lumped node by node.
 """
 import numpy as np
 import ufl
@@ -28,16 +28,17 @@ class Recorder:
         self.von_mises = fem.Function(self.W, name="von_mises")
         self.von_mises_expression = fem.Expression(p.von_mises, self.W.element.interpolation_points())
         pressure = p.contact.pressure
-        nodal = {"pressure": pressure, "active": ufl.conditional(ufl.gt(pressure, 0), 1.0, 0.0)}
-        for component in p.components:
-            nodal.update(component.nodal_outputs())
-        self.states = [name for name in nodal if name != "pressure"]  # counted per row as <name>_nodes
-        self.nodal_names = list(nodal) + ["area"]
-        values = list(nodal.values()) + [1.0]
-        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
+        # the effects' contact states (friction: stick, slip) weighted by the pressure: a node is in
+        # the state that carries most of its contact force
+        states = {name: pressure * value for component in p.components
+                  for name, value in component.nodal_outputs().items()}
+        self.states = list(states)  # counted per row as <name>_nodes, beside active_nodes
+        self.nodal_names = ["pressure", *states, "area"]
+        values = [pressure, *states.values(), 1.0]
+        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", p.scene["mesh"]["degree"]), dim=len(values))
         q = ufl.TestFunction(self.Q)
         self.energy, self.nodal_form = compile_forms(
-            [p.energy_density * p.dx, sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact])
+            [p.energy_density * p.dx, sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact_nodes])
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
         x = newton.coordinates
@@ -67,7 +68,7 @@ class Recorder:
         for zone in self.zones:
             columns += [*(name for axis in axes for name in (f"contact_{zone}_F{axis}", f"contact_{zone}_{axis}")),
                         f"contact_{zone}_force"]
-        columns += ["max_pressure", *(f"{state}_nodes" for state in self.states)]
+        columns += ["max_pressure", "active_nodes", *(f"{state}_nodes" for state in self.states)]
         for component in p.components:
             columns += list(component.outputs())
         return columns + ["elastic_energy", "max_von_mises", "yielded", "stabilization_force"]
@@ -79,7 +80,8 @@ class Recorder:
         return self.comm.allreduce(value, op=MPI.MAX)
 
     def nodal_values(self) -> dict:
-        """Lumped nodal contact values on this rank's owned P1 nodes (pressure in MPa)."""
+        """Contact values on this rank's owned nodes of the displacement (pressure in MPa), each the
+        mean over the node's contact facets at the node; the states weighted by the pressure."""
         assemble_nodal(self.nodal, self.nodal_form)
         n, k = self.Q.dofmap.index_map.size_local, len(self.nodal_names)
         values = self.nodal.x.array[: n * k].reshape(-1, k)
@@ -95,11 +97,9 @@ class Recorder:
         """The contact pressure (MPa) at the displacement's nodes of the contact surface (this
         rank's owned ones; coordinates in mm): the argument of the pressure's [.]_+ evaluated in
         every cell with one contact facet (its stress on that facet's normal), averaged over those
-        cells at each node, then [.]_+. Lumped to P1 vertices (`nodal_values`), the pressure of a
-        quadratic displacement is smeared over a vertex's patch and moves the contact zone's edge
-        outwards by up to an element; here the edge stays where the pressure's argument changes
-        sign. A node whose cells each have several contact facets (a corner) has no value and is
-        left out."""
+        cells at each node, then [.]_+: the contact zone's edge lies where the argument changes
+        sign (`nodal_values` averages each facet's [.]_+ instead). A node whose cells each have
+        several contact facets (a corner) has no value and is left out."""
         if self._recovery is None:
             self._recovery = _PressureRecovery(self.problem, self.contact_facets, self.contact_nodes)
         return self._recovery()
@@ -145,8 +145,13 @@ class Recorder:
 
         nodal = self.nodal_values()
         row["max_pressure"] = self._max(float(nodal["pressure"].max(initial=0.0)))
-        for state in self.states:
-            row[f"{state}_nodes"] = int(self._sum(int((nodal[state] > 0.5).sum())))
+        active = nodal["pressure"] > 0
+        row["active_nodes"] = int(self._sum(int(active.sum())))
+        if self.states:
+            weights = np.column_stack([nodal[state] for state in self.states])
+            held = np.argmax(weights, axis=1)
+            for i, state in enumerate(self.states):
+                row[f"{state}_nodes"] = int(self._sum(int((active & (held == i)).sum())))
         for component in p.components:
             row.update(component.outputs())
         row["elastic_energy"] = self._sum(fem.assemble_scalar(self.energy))

@@ -157,6 +157,30 @@ def test_block_slides_at_mu_n(friction_block):
     assert row["stick_nodes"] == 0
 
 
+@pytest.mark.parametrize("degree", [1, 2])
+def test_a_3d_block_counts_every_node_it_touches(degree):
+    """A 3-D block pressed by a rigid flat wider than it touches at every node of its top face
+    (P2: vertices and edge midpoints), each node sticking or slipping; dragged at mu P, every
+    touching node slips."""
+    press = {"force": [0.0, 0.0, -PRESS], "load_point": "indenter"}
+    simulation = simulate({
+        "name": "friction_block_3d", "dim": 3, "geometry": "block", "rigid": "indenter", "effects": ["friction"],
+        "block": {"width": 10.0, "depth": 10.0, "height": 5.0}, "indenter": {"shape": "flat", "width": 30.0},
+        "materials": {"block": {"E": 200000.0, "nu": 0.3}}, "contact": {"mu": MU},
+        "mesh": {"contact_size": 2.5, "contact_zone": 4.0, "size_max": 5.0, "degree": degree},
+        "rigid_body": {"dofs": {"x": "prescribed", "y": "held", "rx": "held", "ry": "held", "rz": "held"}},
+        "steps": [{"name": "press", "increments": 1, **press},
+                  {"name": "slide", "increments": 2, **press, "motion": {"x": 0.05}}]})
+    recorder = simulation.recorder
+    top_nodes = recorder.comm.allreduce(len(recorder.contact_nodes))
+    rows = simulation.step_end_rows()
+    press_row, slide_row = rows["press"], rows["slide"]
+    assert press_row["active_nodes"] == top_nodes > 0
+    assert press_row["stick_nodes"] > 0 and press_row["stick_nodes"] + press_row["slip_nodes"] == top_nodes
+    assert slide_row["contact_top_Fx"] == pytest.approx(MU * PRESS, rel=1e-6)
+    assert slide_row["stick_nodes"] == 0 and slide_row["slip_nodes"] == slide_row["active_nodes"] > 0.9 * top_nodes
+
+
 def test_reversed_push_reverses_friction(friction_block):
     row = friction_block.step_end_rows()["back"]
     assert row["contact_top_Fx"] == pytest.approx(-MU * PRESS, rel=0.01)
