@@ -23,8 +23,8 @@ class Recorder:
         self.observers = []  # called after each row, while the increment's state is not yet committed
         p, comm = problem, problem.mesh.comm
         self.comm = comm
-        degree = p.scene["mesh"]["degree"] - 1
-        self.W = fem.FunctionSpace(p.mesh, ("DG", degree))
+        degree = p.scene["mesh"]["degree"]
+        self.W = fem.FunctionSpace(p.mesh, ("DG", degree - 1))
         self.von_mises = fem.Function(self.W, name="von_mises")
         self.von_mises_expression = fem.Expression(p.von_mises, self.W.element.interpolation_points())
         pressure = p.contact.pressure
@@ -35,10 +35,10 @@ class Recorder:
         self.states = list(states)  # counted per row as <name>_nodes, beside active_nodes
         self.nodal_names = ["pressure", *states, "area"]
         values = [pressure, *states.values(), 1.0]
-        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", p.scene["mesh"]["degree"]), dim=len(values))
+        self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", degree), dim=len(values))
         q = ufl.TestFunction(self.Q)
-        self.energy, self.nodal_form = compile_forms(
-            [p.energy_density * p.dx, sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact_nodes])
+        self.energy, self.nodal_form = compile_forms([p.energy_density * p.dx, sum(
+            value * q[i] for i, value in enumerate(values)) * p.contact_measure(degree, nodes=True)])
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
         x = newton.coordinates

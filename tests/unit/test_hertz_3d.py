@@ -126,3 +126,22 @@ def test_only_the_free_rigid_dof_has_derivative_forms():
     assert [name for name, free in zip(rigid.names, rigid.free) if free] == ["z"]
     assert list(simulation.problem.forms.contact_dr) == [2]
     assert list(simulation.newton.kur) == [2]
+
+
+def test_quadratic_history_pressure_is_each_node_s_own():
+    """At P2 (level 0) the history's largest pressure and the nodal values' contact radius are
+    the nodes' own, not a vertex's patch average: measured +0.09 % on p0 and +0.02 % on a (the
+    recovered pressure: +0.09 %, -0.20 %); lumped over the patch the zone's edge moved out by
+    an element (a +12.6 %). 1 % is ten times the error measured."""
+    from femcontact.families.hertz import benchmark as hertz
+    from femcontact.solver.stepping import Simulation
+
+    simulation = Simulation(hertz.scene_3d(benchmark_radius_3d() / 2.5, degree=2))
+    simulation.run()
+    a, p0 = hertz.reference(simulation.problem.scene)
+    assert simulation.history[-1]["max_pressure"] == pytest.approx(p0, rel=0.01)
+    nodal = simulation.recorder.nodal_values()
+    x, pressure = nodal["coordinates"][nodal["on_surface"]], nodal["pressure"][nodal["on_surface"]]
+    r = np.hypot(x[:, 0], x[:, 1])
+    order = np.argsort(r)
+    assert hertz.surface_metrics(r[order], pressure[order])["a"] == pytest.approx(a, rel=0.01)
