@@ -10,8 +10,9 @@ two-point contact), both also with the contact on the hole's exact surface (`con
 resolutions 0.5 to 1.41), and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring
 and withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
 extrapolation of the three finest (`femcontact.references.richardson`) with its observed order,
-the estimated error of the finest rung, |finest - extrapolated| / |extrapolated|, and the spread
-of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
+the estimated error of the finest rung, |finest - extrapolated| / |extrapolated| (at an observed
+order above the discretisation's, that order with a factor of safety 3: `finest_error`), and the
+spread of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
 not run again (delete results/convergence_3d/LADDER/r<resolution> to re-run it). Writes
 results/convergence_3d/convergence_3d.md and .json after every rung.
 
@@ -28,7 +29,7 @@ from femcontact.errors import InputError
 from femcontact.families.repository import SCENES
 from femcontact.io import read_result, write_json_atomic, write_text_atomic
 from femcontact.outputs.tables import markdown_table
-from femcontact.references.richardson import richardson
+from femcontact.references.richardson import SAFETY_FACTOR, finest_error, richardson
 
 from benchmarks.whole_process import run_scene
 
@@ -49,8 +50,8 @@ class Ladder:
     resolutions: tuple = RESOLUTIONS
     settings: dict = field(default_factory=dict)
     order_limit: float = 2.0
-    """The highest order the discretisation can deliver (P1 contact: 2): an observed order above
-    it comes from rungs that happen to line up, and gives no error estimate."""
+    """The highest order the discretisation can deliver (P1 contact: 2): where the rungs line up
+    at an order above it, the error is estimated at this order with a factor of safety 3."""
 
 
 EXACT = {"contact.surface": "'exact'"}
@@ -127,13 +128,18 @@ def extrapolation(name: str, rows: list[dict]) -> list[dict]:
             continue
         ratio = done[-1]["resolution"] / done[-2]["resolution"]
         limit, order = richardson(finest, ratio)
-        converging = math.isfinite(order) and 0 < order <= ladder.order_limit
-        error = abs(finest[-1] - limit) / abs(limit) if converging and limit else None
+        error, error_order = finest_error(finest, ratio, ladder.order_limit)
         spread = (max(finest) - min(finest)) / abs(finest[-1]) if finest[-1] else None
-        why_none = f"order above {ladder.order_limit:g}" if order > ladder.order_limit else "not converging"
         out.append({"quantity": key, "meaning": meaning, "finest": finest[-1], "limit": limit, "order": order,
-                    "error": error, "why_none": why_none, "spread": spread})
+                    "error": error, "capped": error is not None and error_order < order, "spread": spread})
     return out
+
+
+def error_text(entry: dict, order_limit: float) -> str:
+    """A table cell: the estimated error, how it was estimated where the order was capped, or why none."""
+    if entry["error"] is None:
+        return "not converging"
+    return f"{entry['error']:.2%}" + (f" (order {order_limit:g}, x{SAFETY_FACTOR:g})" if entry["capped"] else "")
 
 
 def report(name: str, rows: list[dict]) -> str:
@@ -155,15 +161,18 @@ def report(name: str, rows: list[dict]) -> str:
                                    "estimated error of the finest", f"<= {TARGET:.0%}", "spread of the three finest"],
                                   [[t["meaning"], f"{t['finest']:.6g}", f"{t['limit']:.6g}",
                                     f"{t['order']:.2f}" if math.isfinite(t["order"]) else "- (not monotone)",
-                                    f"{t['error']:.2%}" if t["error"] is not None else t["why_none"],
+                                    error_text(t, ladder.order_limit),
                                     "yes" if t["error"] is not None and t["error"] <= TARGET else "no",
                                     f"{t['spread']:.2%}" if t["spread"] is not None else "-"]
                                    for t in table]),
                   "",
-                  "Spread: (largest - smallest) / finest over the three finest rungs; where they do not "
-                  "converge monotonically (no positive observed order), or line up at an order above the "
-                  f"discretisation's ({ladder.order_limit:g}), it is what the mesh still moves the answer "
-                  "by, not an error bound.", ""]
+                  "Estimated error: |finest - extrapolated| / |extrapolated| at the observed order; where "
+                  f"the three finest rungs line up at an order above the discretisation's "
+                  f"({ladder.order_limit:g}), {SAFETY_FACTOR:g} |finest - next| / (ratio^{ladder.order_limit:g} - 1) "
+                  "/ |finest| (the discretisation's order and a factor of safety of 3, as Roache's grid "
+                  "convergence index does). Spread: (largest - smallest) / finest over the three finest "
+                  "rungs; where they do not converge monotonically (no positive observed order), it is what "
+                  "the mesh still moves the answer by, not an error bound.", ""]
     return "\n".join(lines)
 
 

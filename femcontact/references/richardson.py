@@ -13,3 +13,23 @@ def richardson(values: list[float], ratio: float) -> tuple[float, float]:
     if not math.isfinite(order) or order <= 0:
         return f3, order
     return f3 + (f3 - f2) / (ratio ** order - 1), order
+
+
+SAFETY_FACTOR = 3.0
+"""Roache's factor of safety where the observed order is not the discretisation's (Roache,
+J. Fluids Eng. 133 (2011) 115501: "one at least reverts to using p_th and FS = 3")."""
+
+
+def finest_error(values: list[float], ratio: float, formal_order: float) -> tuple[float | None, float]:
+    """The estimated relative error of the finest of three values on meshes refined by `ratio`,
+    and the order it was estimated with: where they converge monotonically at an observed order
+    up to `formal_order`, Richardson's |finest - limit| / |limit| at that order; at an observed
+    order above it, the formal order with a factor of safety 3 (3 |f3 - f2| / (ratio^p - 1) /
+    |f3|); None (and nan) where they do not converge monotonically."""
+    limit, order = richardson(values, ratio)
+    f2, f3 = values[1], values[2]
+    if not (math.isfinite(order) and order > 0) or not f3:
+        return None, float("nan")
+    if order <= formal_order:
+        return (abs(f3 - limit) / abs(limit) if limit else None), order
+    return SAFETY_FACTOR * abs(f3 - f2) / (ratio ** formal_order - 1) / abs(f3), formal_order
