@@ -135,6 +135,9 @@ MESH = {
     "contact_zone": Field("float", 0.0, "half-length of each fine contact zone (mm), independent of "
                           "`resolution`; 0 = automatic (see docs/geometry.md)", min=0.0),
     "degree": Field("int", 1, "Lagrange degree of the displacement", choices=(1, 2)),
+    "geometry_order": Field("int", 1, "order of the elements' geometry: 2 = quadratic (curved) elements whose "
+                            "edge midpoints lie on the curved surfaces (a hole's cylinder and cone to within "
+                            "h^3); needs mesh.degree = 2", choices=(1, 2)),
     "max_elements": Field("int", MAX_ELEMENTS, "largest estimated number of elements a run may mesh: a guard "
                           "against a mistyped size; raise it on purpose for a large mesh (3-D wedging at 4.8 million "
                           "estimated elements, 1.03M unknowns: 3.7 GB on one rank with the iterative solver, "
@@ -334,6 +337,9 @@ def check_contact(scene: dict) -> None:
     if scene["contact"]["surface"] == "exact" and not round_hole:
         problems.append(f"contact.surface = 'exact': for the round hole of a 3-D peg_in_hole scene with a rigid peg "
                         f"(dim = {dim}, geometry = {scene['geometry']!r}, rigid = {scene.get('rigid')!r})")
+    if scene["mesh"]["geometry_order"] > scene["mesh"]["degree"]:
+        problems.append(f"mesh.geometry_order = {scene['mesh']['geometry_order']}: curved elements need a "
+                        f"displacement of the same degree (mesh.degree = {scene['mesh']['degree']}; set it to 2)")
     table, body = scene["plasticity"]["hardening"], deformable_body(scene)
     if "plasticity" in effects and table and table[0][1] != scene["materials"][body]["yield_stress"]:
         problems.append(f"plasticity.hardening = {table}: its first yield stress must be "

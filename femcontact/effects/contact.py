@@ -62,7 +62,7 @@ class NormalContact(Effect):
         normal_local = ufl.diff(gap, xi)
         normal = rigid.to_global_direction(normal_local, rigid.variable)
         p_sigma = ufl.dot(problem.stress * ufl.FacetNormal(problem.mesh), normal)
-        gamma_n = c["gamma"] * c["E"] / ufl.CellDiameter(problem.mesh)
+        gamma_n = c["gamma"] * c["E"] / cell_diameter(problem.mesh)
         trial = p_sigma - gamma_n * gap if scene["contact"]["method"] == "nitsche" else -gamma_n * gap
         # [trial]_+ with the kink counted as active, so a body touching with zero force
         # already gets the contact stiffness in Newton's first iteration
@@ -80,3 +80,19 @@ class NormalContact(Effect):
         """gamma_N = gamma E / h_contact (N/mm^3), the penalty part of the pressure per mm of gap."""
         c = self.problem.constants
         return float(c["gamma"].value * c["E"].value) / self.problem.contact_size
+
+
+def cell_diameter(mesh):
+    """Each cell's diameter (mm), the largest distance between two of its vertices, as a DG0
+    function: ufl.CellDiameter's value, also on curved (quadratic) cells, which FFCx cannot
+    compute it for."""
+    import numpy as np
+    from dolfinx import cpp, fem
+
+    space = fem.FunctionSpace(mesh, ("DG", 0))
+    tdim = mesh.topology.dim
+    cells = np.arange(mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts,
+                      dtype=np.int32)
+    h = fem.Function(space, name="cell_diameter")
+    h.x.array[space.dofmap.list.array] = cpp.mesh.h(mesh._mesh, tdim, cells)
+    return h

@@ -68,8 +68,7 @@ class Fields:
                          for name, space, value in (("von_mises", W0, p.von_mises), ("stress", T0, p.stress),
                                                     *effect_fields)}
         self.cell_dofs = W0.dofmap.list.array[: self.n_cells]  # one (block) dof per cell, for W0 and T0 alike
-        # contact values lumped to the P1 nodes of the contact surface: integral of value * phi over area,
-        # at the contact points of P1, at the vertices only of P2 (each vertex its own value)
+        # contact values lumped to the P1 nodes of the contact surface: integral of value * phi over area
         contact, dim = p.contact, p.dim
         traction, normal = p.traction, contact.normal
         tangential = traction - ufl.dot(traction, normal) * normal
@@ -82,8 +81,7 @@ class Fields:
         self.friction = bool(friction)
         self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", 1), dim=len(values))
         q = ufl.TestFunction(self.Q)
-        ds = p.ds_contact if p.scene["mesh"]["degree"] == 1 else p.contact_measure(1, nodes=True)
-        self.nodal_form = fem.form(sum(value * q[i] for i, value in enumerate(values)) * ds)
+        self.nodal_form = fem.form(sum(value * q[i] for i, value in enumerate(values)) * p.ds_contact)
         self.nodal = fem.Function(self.Q)
         index_map = self.V1.dofmap.index_map
         self.n_owned = index_map.size_local

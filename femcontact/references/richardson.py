@@ -21,14 +21,18 @@ J. Fluids Eng. 133 (2011) 115501: "one at least reverts to using p_th and FS = 3
 
 
 def finest_error(values: list[float], ratio: float, formal_order: float) -> tuple[float | None, float]:
-    """The estimated relative error of the finest of three values on meshes refined by `ratio`,
-    and the order it was estimated with: where they converge monotonically at an observed order
-    up to `formal_order`, Richardson's |finest - limit| / |limit| at that order; at an observed
-    order above it, the formal order with a factor of safety 3 (3 |f3 - f2| / (ratio^p - 1) /
-    |f3|); None (and nan) where they do not converge monotonically."""
-    limit, order = richardson(values, ratio)
-    f2, f3 = values[1], values[2]
-    if not (math.isfinite(order) and order > 0) or not f3:
+    """The estimated relative error of the finest of three or more values on meshes each refined
+    by `ratio`, and the order it was estimated with. Only where every step moves the same way and
+    each is smaller than the one before (a coarser rung that moves the other way, or by less,
+    shows the three finest are not yet converging): Richardson's |finest - limit| / |limit| from
+    the three finest at their observed order up to `formal_order`; at an observed order above
+    it, the formal order with a factor of safety 3 (3 |f3 - f2| / (ratio^p - 1) / |f3|). Else
+    None (and nan)."""
+    steps = [b - a for a, b in zip(values[:-1], values[1:])]
+    shrinking = all(s * steps[0] > 0 for s in steps) and all(abs(b) < abs(a) for a, b in zip(steps[:-1], steps[1:]))
+    limit, order = richardson(values[-3:], ratio)
+    f2, f3 = values[-2], values[-1]
+    if not shrinking or not (math.isfinite(order) and order > 0) or not f3:
         return None, float("nan")
     if order <= formal_order:
         return (abs(f3 - limit) / abs(limit) if limit else None), order

@@ -148,10 +148,13 @@ DISLODGING = str(SCENES / "dislodging_2d.toml")
     (INSERTION, ["contact.surface='exact'"], "contact.surface = 'exact': for the round hole of a 3-D peg_in_hole "
                                              "scene with a rigid peg (dim = 2"),
     (INSERTION, ["contact.surface='round'"], "contact.surface = 'round'"),
+    (INSERTION, ["mesh.geometry_order=2"], "mesh.geometry_order = 2: curved elements need a displacement of the "
+                                           "same degree (mesh.degree = 1; set it to 2)"),
+    (INSERTION, ["mesh.geometry_order=3"], "mesh.geometry_order = 3"),
 ], ids=["matrix without stiffness", "stiffness of 2 values", "negative stiffness", "indefinite stiffness",
         "asymmetric stiffness", "stiffness without the matrix model", "dislodging increments",
         "gripper spring without stiffness", "gripper stiffness without the spring", "negative gripper stiffness",
-        "exact surface in 2-D", "unknown contact surface"])
+        "exact surface in 2-D", "unknown contact surface", "curved elements at P1", "cubic geometry"])
 def test_run_refuses_bad_support_matrices_and_huge_increments(tmp_path, capsys, scene, assignments, fragment):
     out = tmp_path / "out"
     assert_refused(*cli(capsys, "run", scene, *sets(*assignments), "--out", out), Path(scene).name, fragment)

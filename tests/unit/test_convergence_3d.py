@@ -93,3 +93,16 @@ def test_rungs_that_alternate_get_no_order_even_when_their_steps_shrink():
     entry = convergence_3d.extrapolation("wedging_3d", data)[0]
     assert entry["error"] is None
     assert "| not converging | no | 2.53% |" in convergence_3d.report("wedging_3d", data)
+
+
+def test_a_coarser_rung_that_moves_the_other_way_withholds_the_estimate():
+    """The three finest tilts of the curved insertion ladder (-1.70681, -1.67175, -1.66575 deg)
+    line up at order 5.1, but the rung before moved the other way (-1.70654): no estimate. The
+    P2 wedging force, whose four rungs each move less the same way, keeps its 0.06 %."""
+    from femcontact.references.richardson import finest_error
+
+    assert finest_error([-1.70654, -1.70681, -1.67175, -1.66575], 2 ** 0.5, 3.0)[0] is None
+    assert finest_error([-1.70681, -1.67175, -1.66575], 2 ** 0.5, 3.0)[0] is not None
+    error, _ = finest_error([79.0282, 78.6442, 78.5145, 78.4875], 2 ** 0.5, 3.0)
+    assert error == pytest.approx(3 * 0.0270 / (2 ** 1.5 - 1) / 78.4875, rel=1e-9)
+    assert finest_error([1.0, 1.1, 1.4, 1.5], 2 ** 0.5, 3.0)[0] is None  # steps 0.1, 0.3, 0.1: one grows
