@@ -81,7 +81,7 @@ def test_the_report_opens_with_one_outcomes_row_per_sweep(monkeypatch):
     monkeypatch.setattr(stability, "friction_needed", lambda scene: None)
     text, found = stability.report([("stability", [], None), ("stability_3d", [], None)], "python -m benchmarks.stability")
     assert found == 1  # the case without a result
-    assert section(text, "Outcomes", "stability.md").strip().splitlines() == [
+    assert section(text, "Outcomes").strip().splitlines() == [
         "The cases `python -m benchmarks.stability` draws, each run by the study runner:", "",
         "| sweep | cases | ok | no static equilibrium | failed | without a result | defects |",
         "|:---|---:|---:|---:|---:|---:|---:|",
