@@ -94,5 +94,5 @@ def cell_diameter(mesh):
     cells = np.arange(mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts,
                       dtype=np.int32)
     h = fem.Function(space, name="cell_diameter")
-    h.x.array[space.dofmap.list.array] = cpp.mesh.h(mesh._mesh, tdim, cells)
+    h.x.array[space.dofmap.list.array] = cpp.mesh.h(mesh._mesh, tdim, cells)  # 0.5.2: h takes the C++ mesh
     return h
