@@ -132,7 +132,7 @@ def build(scene: dict, comm, msh_path=None) -> Model:
         try:
             gmsh_tools.start(scene.get("name", "scene"))
             names = module.generate(scene, sizes)
-            if scene["mesh"].get("geometry_order", 1) == 2:
+            if scene["mesh"]["geometry_order"] == 2:
                 gmsh.model.mesh.setOrder(2)  # edge midpoints onto the CAD surfaces: curved elements
             if msh_path is not None:
                 gmsh.write(str(msh_path))

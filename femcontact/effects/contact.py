@@ -86,8 +86,7 @@ def cell_diameter(mesh):
     """Each cell's diameter (mm), the largest distance between two of its vertices, as a DG0
     function: ufl.CellDiameter's value, also on curved (quadratic) cells, which FFCx cannot
     compute it for."""
-    import numpy as np
-    from dolfinx import cpp, fem
+    from dolfinx import cpp
 
     space = fem.FunctionSpace(mesh, ("DG", 0))
     tdim = mesh.topology.dim

@@ -38,7 +38,7 @@ class Recorder:
         self.Q = fem.VectorFunctionSpace(p.mesh, ("Lagrange", degree), dim=len(values))
         q = ufl.TestFunction(self.Q)
         self.energy, self.nodal_form = compile_forms([p.energy_density * p.dx, sum(
-            value * q[i] for i, value in enumerate(values)) * p.contact_measure(degree, nodes=True)])
+            value * q[i] for i, value in enumerate(values)) * p.contact_measure(nodes=True)])
         self.nodal = fem.Function(self.Q)
         n_owned = p.V.dofmap.index_map.size_local
         x = newton.coordinates

@@ -65,7 +65,7 @@ class Problem:
         self.u = fem.Function(self.V, name="displacement")
         self.v = ufl.TestFunction(self.V)
         self.dx = ufl.Measure("dx", domain=self.mesh)
-        self.ds_contact = self.contact_measure(degree)
+        self.ds_contact = self.contact_measure()
         self.shape = self._shape_constants(model.rigid)
         self.rigid = scene_rigid_body(scene, self.mesh, model.rigid)
         self.bcs = self._supports()
@@ -122,7 +122,7 @@ class Problem:
                      jacobian_bulk=jacobian_bulk, contact_dr=dict(zip(free, compiled)),
                      jacobian_integrand=ufl.derivative(self.bulk + contact, self.u, du))
 
-    def contact_measure(self, degree: int, nodes: bool = False):
+    def contact_measure(self, nodes: bool = False):
         """Contact terms use a fixed rule, so the residual and its derivatives integrate alike,
         with points on the element nodes (node-to-surface contact: a penetrating corner or edge
         node is seen at once). In 2-D it is Gauss-Lobatto; basix has no such rule on triangles,
@@ -130,8 +130,9 @@ class Problem:
         on the exact curved surface, the facets' interior does not), P2 its nodes and centroid
         (`P2_NODE_RULE`, on exact surfaces too). On P1's exact surfaces (`contact.surface =
         "exact"`) the points are the vertices and edge midpoints, each facet's vertex rule on its
-        four halved triangles (`EXACT_SURFACE_RULE`). `nodes`: the points are the nodes of Lagrange
-        elements of `degree` only (P2: without the centroid), for values lumped node by node."""
+        four halved triangles (`EXACT_SURFACE_RULE`). `nodes`: the points are the displacement's
+        nodes only (P2: without the centroid), for values lumped node by node."""
+        degree = self.scene["mesh"]["degree"]
         if nodes and self.dim == 3:
             rule = VERTEX_RULE if degree == 1 else EXACT_SURFACE_RULE
             quadrature = {"quadrature_rule": "custom", "quadrature_degree": degree, **rule}
