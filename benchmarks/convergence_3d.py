@@ -8,13 +8,14 @@ released), scenes/insertion_3d.toml (a tilted peg with a rounded rim on complian
 two-point contact), both also with the contact on the hole's exact surface (`contact.surface =
 "exact"`), the wedging also with quadratic elements on the exact surface (`mesh.degree = 2`,
 resolutions 0.5 to 1.41), both on curved quadratic elements (`mesh.geometry_order = 2`, the same
-rungs), and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring
-and withdrawn). For each answer in a ladder's quantities: the value on every rung, the Richardson
-extrapolation of the three finest (`femcontact.references.richardson`) with its observed order,
-the estimated error of the finest rung, |finest - extrapolated| / |extrapolated| (at an observed
-order above the discretisation's, that order with a factor of safety 3: `finest_error`), and the
-spread of the three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read,
-not run again (delete results/convergence_3d/LADDER/r<resolution> to re-run it). Writes
+rungs), there also with the contact force along the wall's normal (`contact.normal = "wall"`),
+and scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each
+answer in a ladder's quantities: the value on every rung, the Richardson extrapolation of the
+three finest (`femcontact.references.richardson`) with its observed order, the estimated error of
+the finest rung, |finest - extrapolated| / |extrapolated| (at an observed order above the
+discretisation's, that order with a factor of safety 3: `finest_error`), and the spread of the
+three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read, not run
+again (delete results/convergence_3d/LADDER/r<resolution> to re-run it). Writes
 results/convergence_3d/convergence_3d.md and .json after every rung.
 
     python -m benchmarks.convergence_3d [--ladder wedging_3d ...] [--resolutions 1 1.4142 2 2.8284] [--ranks 2]
@@ -59,6 +60,8 @@ EXACT = {"contact.surface": "'exact'"}
 """The contact measured on the hole's exact round surfaces (docs/wedging_3d.md)."""
 CURVED = {"mesh.degree": "2", "mesh.geometry_order": "2"}
 """Quadratic elements with curved (quadratic) geometry: the hole's cylinder and cone to within h^3."""
+WALL_NORMAL = {**CURVED, "contact.normal": "'wall'"}
+"""Curved quadratic elements, the contact force along the hole wall's normal where the wall is smooth."""
 P2_RESOLUTIONS = (0.5, 0.5 * 2 ** 0.5, 1.0, 2 ** 0.5)
 """Rungs of the quadratic ladders: about the unknowns of the linear ones at twice the resolution."""
 
@@ -99,6 +102,13 @@ LADDERS = {"wedging_3d": WEDGING,
                                            title="3-D wedging on curved quadratic elements under mesh refinement"),
            "insertion_3d_p2_curved": replace(INSERTION, settings=CURVED, resolutions=P2_RESOLUTIONS, order_limit=3.0,
                                              title="3-D insertion on curved quadratic elements under mesh refinement"),
+           "wedging_3d_p2_wall": replace(WEDGING, settings=WALL_NORMAL, resolutions=P2_RESOLUTIONS, order_limit=3.0,
+                                         title="3-D wedging on curved quadratic elements, the force along the wall's "
+                                               "normal, under mesh refinement"),
+           "insertion_3d_p2_wall": replace(INSERTION, settings=WALL_NORMAL, resolutions=P2_RESOLUTIONS,
+                                           order_limit=3.0,
+                                           title="3-D insertion on curved quadratic elements, the force along the "
+                                                 "wall's normal, under mesh refinement"),
            "snap_fit_3d": SNAP_FIT}
 
 

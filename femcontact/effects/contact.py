@@ -10,12 +10,21 @@ revolution (a round hole's wall and chamfer) are moved radially onto that surfac
 gap is measured (`exact_surface_point`): the flat facets' chords, which lie
 inside the hole by up to h^2/(8R), no longer touch the peg, and the contact can be integrated
 at more points than the facets' vertices.
+
+With `contact.normal = "wall"` the force acts along the wall's normal (`wall_normal`) wherever
+the wall is smooth (`smooth_wall`) and along the body's at the wall's edges: a rigid edge or a
+rounded rim pressing a smooth wall pushes along the wall's normal, while the wall's nodes that
+sample it see the body's flank or rounding, whose normal leans by their position on it.
+
+The rules below put the contact points on the facets' nodes (`Problem.contact_measure`).
 """
 from types import SimpleNamespace
 
 import numpy as np
 import ufl
 from dolfinx import fem
+from dolfinx.fem import petsc
+from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
 from femcontact.physics.signed_distance import signed_distance
@@ -46,6 +55,79 @@ def exact_surface_point(problem):
     return x + w * (r_h / r - 1) * radial
 
 
+VERTEX_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "quadrature_weights": [1 / 6] * 3}
+"""Contact points on a reference triangle (area 1/2) for 3-D P1 facets: its vertices."""
+EXACT_SURFACE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
+                      "quadrature_weights": [1 / 24] * 3 + [1 / 8] * 3}
+"""Contact points on a reference triangle (area 1/2) for exact surfaces: the vertex rule on the four
+triangles that halve its edges (`VERTEX_RULE` on each), so the points are the nodes of a
+quadratic triangle."""
+P2_NODE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5],
+                                      [1 / 3, 1 / 3]],
+                "quadrature_weights": [1 / 40] * 3 + [1 / 15] * 3 + [9 / 40]}
+"""Contact points on a reference triangle (area 1/2) for 3-D P2 facets: its six nodes and its
+centroid, positive weights, exact for cubics. A sharp edge of the contact surface lies on nodes,
+so its contact is seen where Gauss points inside the facets would let it penetrate."""
+
+SMOOTH_WALL_ANGLE = np.radians(20.0)
+"""A boundary node whose facets' normals all lie within this angle of their mean is on a smooth
+part of the wall (a cylinder's facets meet at h/R, a chamfer's edge at 45 deg, a mouth at 90)."""
+SMOOTH_POINT = 0.75
+"""A contact point takes the wall's normal where `smooth_wall`, interpolated linearly, exceeds
+this: at the wall's smooth nodes and between them, not next to an edge node."""
+
+
+def wall_normal(problem, exact: bool):
+    """The deformable body's outward unit normal at the contact points, turned by its
+    deformation (Nanson: F^-T N). On an exact surface of revolution (`exact_surface_point`) the
+    flat facet's normal keeps its slope along the axis and points across it radially, as the
+    cylinder's or cone's own does."""
+    mesh, dim = problem.mesh, problem.dim
+    N = ufl.FacetNormal(mesh)
+    if exact:
+        revolution = problem.model.revolution
+        a = ufl.as_vector(list(revolution["direction"]))
+        d = ufl.SpatialCoordinate(mesh) - ufl.as_vector(list(revolution["point"]))
+        radial = d - ufl.dot(d, a) * a
+        e_r = radial / ufl.sqrt(ufl.dot(radial, radial))
+        along = ufl.dot(N, a)
+        across = ufl.sqrt(ufl.max_value(1 - along ** 2, 0.0)) * ufl.sign(ufl.dot(N, e_r))
+        N = along * a + across * e_r
+    n = ufl.inv(ufl.Identity(dim) + ufl.grad(problem.u)).T * N
+    return n / ufl.sqrt(ufl.dot(n, n))
+
+
+def smooth_wall(problem):
+    """1 at the boundary nodes where the deformable body's surface is smooth, 0 at its edges
+    and corners (a node where some boundary facet's normal lies more than SMOOTH_WALL_ANGLE
+    from the facets' mean normal there), as a P1 function."""
+    mesh, dim = problem.mesh, problem.dim
+    nodal = ({"quadrature_rule": "GLL", "quadrature_degree": 1} if dim == 2
+             else {"quadrature_rule": "custom", "quadrature_degree": 1, **VERTEX_RULE})
+    ds = ufl.Measure("ds", domain=mesh, metadata=nodal)
+    N = ufl.FacetNormal(mesh)
+    mean = fem.Function(fem.VectorFunctionSpace(mesh, ("CG", 1)))
+    mean.x.array[:] = _assembled(ufl.dot(N, ufl.TestFunction(mean.function_space)) * ds)
+    vectors = mean.x.array.reshape(-1, dim)
+    vectors /= np.maximum(np.linalg.norm(vectors, axis=1), 1e-300)[:, None]
+    Q = fem.FunctionSpace(mesh, ("CG", 1))
+    apart = ufl.conditional(ufl.lt(ufl.dot(N, mean), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
+    smooth = fem.Function(Q, name="smooth_wall")
+    smooth.x.array[:] = np.where(_assembled(apart * ufl.TestFunction(Q) * ds) > 0, 0.0, 1.0)
+    return smooth
+
+
+def _assembled(integrand) -> np.ndarray:
+    """The vector of a linear form, summed over the ranks, at the local and ghost dofs."""
+    vector = petsc.assemble_vector(fem.form(integrand))
+    vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    with vector.localForm() as local:
+        values = local.array.copy()
+    vector.destroy()
+    return values
+
+
 class NormalContact(Effect):
     name = "contact"
 
@@ -61,6 +143,9 @@ class NormalContact(Effect):
         gap = signed_distance(problem.shape, xi)
         normal_local = ufl.diff(gap, xi)
         normal = rigid.to_global_direction(normal_local, rigid.variable)
+        if scene["contact"]["normal"] == "wall":  # the wall pushes along its own normal where smooth
+            normal = ufl.conditional(ufl.gt(smooth_wall(problem), SMOOTH_POINT), -wall_normal(problem, exact), normal)
+            normal_local = rigid.to_local_direction(normal, rigid.variable)
         p_sigma = ufl.dot(problem.stress * ufl.FacetNormal(problem.mesh), normal)
         gamma_n = c["gamma"] * c["E"] / cell_diameter(problem.mesh)
         trial = p_sigma - gamma_n * gap if scene["contact"]["method"] == "nitsche" else -gamma_n * gap

@@ -108,6 +108,11 @@ class RigidBody:
         _, angles = self.split(r)
         return rotation_ufl(angles) * self.Q0_constant * a
 
+    def to_local_direction(self, a, r):
+        """Rotate a spatial vector a into the shape frame (UFL)."""
+        _, angles = self.split(r)
+        return self.Q0_constant.T * rotation_ufl(angles).T * a
+
     def reference_point(self, values=None) -> np.ndarray:
         """Current reference point (mm)."""
         values = self.values if values is None else values

@@ -19,24 +19,12 @@ from mpi4py import MPI
 
 from femcontact.config.scene import deformable_body
 from femcontact.effects import components_for
+from femcontact.effects.contact import EXACT_SURFACE_RULE, P2_NODE_RULE, VERTEX_RULE
 from femcontact.errors import InputError
 from femcontact.jit import compile_forms
 from femcontact.physics.rigid_body import scene_rigid_body
 from femcontact.physics.rotation import rotation_numpy
 
-VERTEX_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "quadrature_weights": [1 / 6] * 3}
-"""Contact points on a reference triangle (area 1/2) for 3-D P1 facets: its vertices."""
-EXACT_SURFACE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
-                      "quadrature_weights": [1 / 24] * 3 + [1 / 8] * 3}
-"""Contact points on a reference triangle (area 1/2) for exact surfaces: the vertex rule on the four
-triangles that halve its edges (`VERTEX_RULE` on each), so the points are the nodes of a
-quadratic triangle."""
-P2_NODE_RULE = {"quadrature_points": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5],
-                                      [1 / 3, 1 / 3]],
-                "quadrature_weights": [1 / 40] * 3 + [1 / 15] * 3 + [9 / 40]}
-"""Contact points on a reference triangle (area 1/2) for 3-D P2 facets: its six nodes and its
-centroid, positive weights, exact for cubics. A sharp edge of the contact surface lies on nodes,
-so its contact is seen where Gauss points inside the facets would let it penetrate."""
 SHAPE_PARAMETERS = ("half_width", "length", "radius", "corner_radius", "depth", "block_width", "bottom_thickness")
 
 

@@ -17,7 +17,7 @@ from mpi4py import MPI
 
 from femcontact.effects.contact import exact_surface_point
 from femcontact.families import load_scene
-from femcontact.problem.problem import EXACT_SURFACE_RULE, P2_NODE_RULE
+from femcontact.effects.contact import EXACT_SURFACE_RULE, P2_NODE_RULE
 from femcontact.solver.stepping import Simulation
 
 SCENES = Path(__file__).parents[2] / "scenes"

@@ -7,7 +7,11 @@ stabilisation, the two resultants balance (no external load) and lie on the line
 the two contact centres (a wedged peg is a two-force body). The same with the peg's rims
 rounded (`peg.corner_radius` = 1 mm, ~10 s): wedged alike, and contact B found on the rim's
 torus where the placement puts it, which the sharp rim misses on this mesh; and with a 1 mm x
-45 deg tip chamfer (`peg.chamfer_width`, a cone): wedged alike. See docs/wedging_3d.md.
+45 deg tip chamfer (`peg.chamfer_width`, a cone): wedged alike; and with the contact force
+along the wall's normal (`contact.normal = "wall"`): wedged alike, and under the couple the rim
+sliding down the wall at B is held by the wall's normal force and Coulomb friction, so contact
+B's force leans from the wall's normal by mu (the rigid body's normal would tilt it with the
+peg's flank). See docs/wedging_3d.md.
 """
 from pathlib import Path
 
@@ -48,12 +52,17 @@ def chamfered():
     return run("peg.chamfer_width=1.0")
 
 
+@pytest.fixture(scope="module")
+def wall_normal():
+    return run("contact.normal='wall'")
+
+
 def test_couple_increases_the_tilt(released):
     rows = released.step_end_rows()
     assert rows["load"]["tilt_deg"] > np.degrees(released.problem.model.rigid["tilt"])
 
 
-@pytest.mark.parametrize("case", ["released", "rounded", "chamfered"])
+@pytest.mark.parametrize("case", ["released", "rounded", "chamfered", "wall_normal"])
 def test_released_peg_stays_wedged(case, request):
     row = request.getfixturevalue(case).step_end_rows()["release"]
     moment = 1000.0
@@ -111,3 +120,15 @@ def test_a_peg_without_stiffness_where_it_starts_follows_the_load():
     force_b, _ = zone(row, "B")
     assert np.linalg.norm(force_a) == pytest.approx(15.8, rel=0.05)
     assert np.linalg.norm(force_a + force_b) < 1e-6 * np.linalg.norm(force_a)  # balanced: no other load
+
+
+def test_the_sliding_rim_leans_from_the_wall_by_the_friction_coefficient(wall_normal, released):
+    """Under the couple the peg turns and its rim slides down the wall at B: the wall's force is
+    its normal force and mu times it along the wall, so Fz / |F_horizontal| = mu (Coulomb's bound,
+    reached where the rim slides; measured 0.35 % below it on this mesh, where some of B's nodes
+    stick: 1 % allowed). Along the rigid body's normal the sharp rim is seen by the flank's
+    normal, tilted with the peg: mu + tan(tilt) = 0.224 (measured 0.2251)."""
+    mu = 0.2
+    for simulation, expected in ((wall_normal, mu), (released, mu + np.tan(np.radians(1.37)))):
+        force, _ = zone(simulation.step_end_rows()["load"], "B")
+        assert abs(force[2]) / np.hypot(force[0], force[1]) == pytest.approx(expected, rel=0.01)

@@ -1,0 +1,111 @@
+"""The contact force along the wall's normal (`contact.normal = "wall"`, effects/contact.py).
+
+`smooth_wall` marks the boundary nodes where the deformable body's surface is smooth: a node
+is on an edge when some boundary facet there turns more than SMOOTH_WALL_ANGLE (20 deg) from
+the facets' mean normal. Checked on meshes whose edges are known: the corners of a square and
+the edges of a cube (90 deg), and a square's bottom side bent at its middle by 16 deg (smooth:
+each facet 8 deg from the mean) and by 50 deg (an edge: 25 deg).
+
+A frictionless contact on a flat wall pushes along the wall's normal: with the force along the
+wall's normal the rigid body's tangential reaction is zero to round-off wherever the contact
+points sit under it; along the rigid body's normal each point's force tilts by its offset over
+the body's radius, and the sum keeps what the points' asymmetry leaves. On a round hole's exact
+surface (`contact.surface = "exact"`) the wall's normal is the cylinder's or cone's own.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from femcontact.effects.contact import smooth_wall, wall_normal
+from femcontact.families import load_scene
+from femcontact.solver.stepping import Simulation
+
+SCENES = Path(__file__).parents[2] / "scenes"
+
+
+class Body:
+    """What `smooth_wall` reads of a problem: its mesh and dimension."""
+
+    def __init__(self, mesh):
+        self.mesh, self.dim = mesh, mesh.geometry.dim
+
+
+def edge_nodes(mesh) -> np.ndarray:
+    """Coordinates of the owned nodes `smooth_wall` puts on an edge."""
+    smooth = smooth_wall(Body(mesh))
+    owned = smooth.function_space.dofmap.index_map.size_local
+    x = smooth.function_space.tabulate_dof_coordinates()[:owned]
+    return x[smooth.x.array[:owned] == 0.0]
+
+
+def test_a_square_has_edges_at_its_corners():
+    square = dmesh.create_unit_square(MPI.COMM_WORLD, 4, 4)
+    corners = edge_nodes(square)[:, :2]
+    found = np.concatenate(MPI.COMM_WORLD.allgather(corners))
+    assert sorted(map(tuple, np.round(found, 12))) == [(0, 0), (0, 1), (1, 0), (1, 1)]
+
+
+def test_a_cube_has_edges_along_its_edges():
+    cube = dmesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2)
+    found = np.concatenate(MPI.COMM_WORLD.allgather(edge_nodes(cube)))
+    on_two_faces = (np.isclose(found, 0) | np.isclose(found, 1)).sum(axis=1) >= 2
+    assert len(found) == 8 + 12 and on_two_faces.all()
+
+
+@pytest.mark.parametrize("bend_deg, smooth", [(16.0, True), (50.0, False)])
+def test_a_bent_side_is_smooth_below_the_angle(bend_deg, smooth):
+    square = dmesh.create_unit_square(MPI.COMM_SELF, 2, 2)
+    x = square.geometry.x
+    middle = np.isclose(x[:, 0], 0.5) & np.isclose(x[:, 1], 0.0)
+    x[middle, 1] = -0.5 * np.tan(np.radians(bend_deg / 2))
+    found = edge_nodes(square)[:, :2]
+    at_bend = np.isclose(found[:, 0], 0.5) & (found[:, 1] < 0)
+    assert at_bend.any() != smooth
+    assert len(found) == 4 + (not smooth)
+
+
+@pytest.mark.parametrize("normal", ["wall", "body"])
+def test_a_frictionless_flat_wall_pushes_along_its_normal(normal):
+    """The 2-D Hertz scene's cylinder pressed 5 um into the block, 0.07 mm (a third of a contact
+    element) to the side of the nodes' symmetric layout."""
+    scene = load_scene(SCENES / "hertz.toml", ["mesh.contact_size=0.2", f"contact.normal='{normal}'"])
+    simulation = Simulation(scene)
+    rigid = simulation.problem.rigid
+    rigid.values[:] = [0.07, -0.005, 0.0]
+    rigid.sync()
+    load = simulation.schedule.load(0, 0.25, 0.25)
+    _, R_r, _ = simulation.newton.assemble_residual(load)
+    tangential, pressing = -(R_r + load.generalized_force(rigid.values))[:2]  # the contact's force on the body
+    assert abs(pressing) > 10.0  # N/mm: the contact carries a force
+    if normal == "wall":
+        assert abs(tangential) <= 1e-12 * abs(pressing)
+    else:
+        assert abs(tangential) > 1e-6 * abs(pressing)  # 1.0e-5 of it
+
+
+@pytest.mark.parametrize("surface", ["exact", "facets"])
+def test_the_exact_wall_normal_has_no_circumferential_part(surface):
+    """On the round hole's cylinder and cone the exact surface's normal lies in the plane of the
+    axis (n . t = 0, t the circumferential direction), to round-off; a flat facet's normal turns
+    by up to h / 2R about the axis (1 mm contact elements on R = 5.05 mm, 2 mm further off: RMS
+    measured 3e-17 and 0.055)."""
+    scene = load_scene(SCENES / "insertion_3d.toml", ["mesh.contact_size=1.0", "mesh.contact_zone=3.0",
+                                                       f"contact.surface='{surface}'"])
+    problem = Simulation(scene, MPI.COMM_SELF).problem
+    model = problem.model
+    n = wall_normal(problem, surface == "exact")
+    x = ufl.SpatialCoordinate(problem.mesh)
+    t = ufl.as_vector([-x[1], x[0], 0.0]) / ufl.sqrt(x[0] ** 2 + x[1] ** 2)  # the axis is z through 0
+    ds = ufl.Measure("ds", domain=problem.mesh, subdomain_data=model.facet_tags, metadata={"quadrature_degree": 4})
+    walls = ds(tuple(model.facets[name] for name in model.revolution["facets"]))
+    area = fem.assemble_scalar(fem.form(1.0 * walls))
+    rms = np.sqrt(fem.assemble_scalar(fem.form(ufl.dot(n, t) ** 2 * walls)) / area)
+    if surface == "exact":
+        assert rms < 1e-12
+    else:
+        assert 0.01 < rms < 0.1
