@@ -167,9 +167,10 @@ class Recorder:
 
 class _PressureRecovery:
     """`Recorder.recovered_pressure`'s cells, normals and expression, made on first use. The
-    pressure's argument is linear in the facet normal n: arg(n) = arg(0) + sum_k n_k (arg(e_k) -
-    arg(0)). One expression evaluates those dim + 1 parts at the displacement's nodes of every
-    cell (no new finite element to compile); each cell's own contact facet supplies n."""
+    pressure's argument is evaluated at the displacement's nodes of every cell with one contact
+    facet, the facet normal n (which enters Nitsche's stress term and, with `contact.normal =
+    "wall"`, the contact's direction) replaced by that facet's normal, held cell by cell in DG0
+    fields."""
 
     def __init__(self, p, facets: np.ndarray, nodes: np.ndarray):
         """`facets`: this rank's contact facets; `nodes`: its owned nodes on them (V's blocks)."""
@@ -194,12 +195,14 @@ class _PressureRecovery:
         self.cells, self.normals = cells[single], normals[single]
 
         _, argument, _ = p.contact.pressure.ufl_operands  # conditional(argument >= 0, argument, 0)
-        facet_normal = ufl.FacetNormal(mesh)
-        at_zero = ufl.replace(argument, {facet_normal: ufl.as_vector([0.0] * tdim)})
-        parts = [at_zero] + [ufl.replace(argument, {facet_normal: ufl.as_vector(np.eye(tdim)[k])}) - at_zero
-                             for k in range(tdim)]
+        space = fem.FunctionSpace(mesh, ("DG", 0))  # scalar: the element Nitsche's cell size compiled
+        dofs = space.dofmap.list.array.reshape(-1)[self.cells]
+        components = [fem.Function(space) for _ in range(tdim)]
+        for k, component in enumerate(components):
+            component.x.array[dofs] = self.normals[:, k]
         V = p.V
-        self.expression = fem.Expression(ufl.as_vector(parts), V.element.interpolation_points())
+        self.expression = fem.Expression(ufl.replace(argument, {ufl.FacetNormal(mesh): ufl.as_vector(components)}),
+                                         V.element.interpolation_points())
         self.nodes_of_cells = V.dofmap.list.array.reshape(len(V.dofmap.list), -1)[self.cells]
         self.sum, self.count = la.vector(V.dofmap.index_map), la.vector(V.dofmap.index_map)
         self.add = la.ScatterMode.add
@@ -207,11 +210,9 @@ class _PressureRecovery:
         self.coordinates = V.tabulate_dof_coordinates()[nodes, :tdim]
 
     def __call__(self) -> tuple[np.ndarray, np.ndarray]:
-        n_cells, nodes_per_cell = self.nodes_of_cells.shape
-        parts = np.zeros((n_cells, nodes_per_cell, self.normals.shape[1] + 1))
-        if n_cells:  # a rank may own no cell on the contact surface
-            parts[:] = self.expression.eval(self.cells).reshape(parts.shape)
-        argument = parts[:, :, 0] + np.einsum("cnk,ck->cn", parts[:, :, 1:], self.normals)
+        argument = np.zeros(self.nodes_of_cells.shape)
+        if len(argument):  # a rank may own no cell on the contact surface
+            argument[:] = self.expression.eval(self.cells).reshape(argument.shape)
         for vector, values in ((self.sum, argument.ravel()), (self.count, 1.0)):
             vector.array[:] = 0.0
             np.add.at(vector.array, self.nodes_of_cells.ravel(), values)
