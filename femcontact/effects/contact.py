@@ -22,11 +22,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import ufl
-from dolfinx import fem
+from dolfinx import cpp, fem
 from dolfinx.fem import petsc
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
+from femcontact.jit import compile_forms
 from femcontact.physics.signed_distance import signed_distance
 
 
@@ -107,19 +108,20 @@ def smooth_wall(problem):
     ds = ufl.Measure("ds", domain=mesh, metadata=nodal)
     N = ufl.FacetNormal(mesh)
     mean = fem.Function(fem.VectorFunctionSpace(mesh, ("CG", 1)))
-    mean.x.array[:] = _assembled(ufl.dot(N, ufl.TestFunction(mean.function_space)) * ds)
+    smooth = fem.Function(fem.FunctionSpace(mesh, ("CG", 1)), name="smooth_wall")
+    apart = ufl.conditional(ufl.lt(ufl.dot(N, mean), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
+    mean_form, apart_form = compile_forms([ufl.dot(N, ufl.TestFunction(mean.function_space)) * ds,
+                                           apart * ufl.TestFunction(smooth.function_space) * ds])
+    mean.x.array[:] = _assembled(mean_form)
     vectors = mean.x.array.reshape(-1, dim)
     vectors /= np.maximum(np.linalg.norm(vectors, axis=1), 1e-300)[:, None]
-    Q = fem.FunctionSpace(mesh, ("CG", 1))
-    apart = ufl.conditional(ufl.lt(ufl.dot(N, mean), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
-    smooth = fem.Function(Q, name="smooth_wall")
-    smooth.x.array[:] = np.where(_assembled(apart * ufl.TestFunction(Q) * ds) > 0, 0.0, 1.0)
+    smooth.x.array[:] = np.where(_assembled(apart_form) > 0, 0.0, 1.0)
     return smooth
 
 
-def _assembled(integrand) -> np.ndarray:
-    """The vector of a linear form, summed over the ranks, at the local and ghost dofs."""
-    vector = petsc.assemble_vector(fem.form(integrand))
+def _assembled(form) -> np.ndarray:
+    """The vector of a compiled linear form, summed over the ranks, at the local and ghost dofs."""
+    vector = petsc.assemble_vector(form)
     vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
     with vector.localForm() as local:
@@ -171,8 +173,6 @@ def cell_diameter(mesh):
     """Each cell's diameter (mm), the largest distance between two of its vertices, as a DG0
     function: ufl.CellDiameter's value, also on curved (quadratic) cells, which FFCx cannot
     compute it for."""
-    from dolfinx import cpp
-
     space = fem.FunctionSpace(mesh, ("DG", 0))
     tdim = mesh.topology.dim
     cells = np.arange(mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts,
