@@ -14,7 +14,9 @@ at more points than the facets' vertices.
 With `contact.normal = "wall"` the force acts along the wall's normal (`wall_normal`) wherever
 the wall is smooth (`smooth_wall`) and along the body's at the wall's edges: a rigid edge or a
 rounded rim pressing a smooth wall pushes along the wall's normal, while the wall's nodes that
-sample it see the body's flank or rounding, whose normal leans by their position on it.
+sample it see the body's flank or rounding, whose normal leans by their position on it. Where a
+wall sinks round the body's edge onto its next face (the two normals more than WALL_BODY_ANGLE
+apart), the body's normal is kept.
 
 The rules below put the contact points on the facets' nodes (`Problem.contact_measure`).
 """
@@ -76,6 +78,10 @@ part of the wall (a cylinder's facets meet at h/R, a chamfer's edge at 45 deg, a
 SMOOTH_POINT = 0.75
 """A contact point takes the wall's normal where `smooth_wall`, interpolated linearly, exceeds
 this: at the wall's smooth nodes and between them, not next to an edge node."""
+WALL_BODY_ANGLE = np.radians(45.0)
+"""A contact point takes the wall's normal only where it lies within this angle of the body's: a
+rim pressing the wall (the body's normal off by its tilt or rounding) does; a wall wrapped round
+the body's edge, touching its next face, does not."""
 
 
 def wall_normal(problem, exact: bool):
@@ -146,7 +152,10 @@ class NormalContact(Effect):
         normal_local = ufl.diff(gap, xi)
         normal = rigid.to_global_direction(normal_local, rigid.variable)
         if scene["contact"]["normal"] == "wall":  # the wall pushes along its own normal where smooth
-            normal = ufl.conditional(ufl.gt(smooth_wall(problem), SMOOTH_POINT), -wall_normal(problem, exact), normal)
+            wall = -wall_normal(problem, exact)
+            along_wall = ufl.And(ufl.gt(smooth_wall(problem), SMOOTH_POINT),
+                                 ufl.gt(ufl.dot(wall, normal), np.cos(WALL_BODY_ANGLE)))
+            normal = ufl.conditional(along_wall, wall, normal)
             normal_local = rigid.to_local_direction(normal, rigid.variable)
         p_sigma = ufl.dot(problem.stress * ufl.FacetNormal(problem.mesh), normal)
         gamma_n = c["gamma"] * c["E"] / cell_diameter(problem.mesh)

@@ -109,3 +109,26 @@ def test_the_exact_wall_normal_has_no_circumferential_part(surface):
         assert rms < 1e-12
     else:
         assert 0.01 < rms < 0.1
+
+
+def test_a_compliant_wall_wrapped_round_the_peg_s_corner_keeps_the_peg_s_normal_there():
+    """Thesis case 2 wedged (l_d 8, Mz 1500 N*mm, the peg's inertia) in blocks 65 times more
+    compliant (E = 2969 MPa), resolution 0.5: the peg's corner sinks into the wall, which wraps
+    round it onto the tip face. Where the wall's normal lies more than WALL_BODY_ANGLE (45 deg)
+    from the peg's, the contact takes the peg's: along the wall's normal everywhere, the wall's
+    points under the tip face push sideways, and the load step stalls (measured: 8 cuts, then
+    40 Newton iterations ending at a residual of 1.06 N). The wedge holds inside the friction
+    cones (measured |Fy / Fx| = 0.096 at both contacts, mu = 0.2), balanced to round-off."""
+    from femcontact.families.dislodging.pull import wedged_simulation
+
+    scene = load_scene(SCENES / "dislodging_2d.toml",
+                       ["mesh.resolution=0.5", "materials.hole.E=2969.2", "peg.insertion_depth=8.0",
+                        "steps.0.moment=[1500.0]", "dislodging.case=2", "contact.normal='wall'"])
+    simulation, _ = wedged_simulation(scene)
+    row = simulation.history[-1]
+    a = np.array([row["contact_A_Fx"], row["contact_A_Fy"]])
+    b = np.array([row["contact_B_Fx"], row["contact_B_Fy"]])
+    assert np.linalg.norm(a) > 50.0  # N/mm: wedged
+    assert np.linalg.norm(a + b) <= 1e-6 * np.linalg.norm(a)
+    for force in (a, b):
+        assert abs(force[1]) <= scene["contact"]["mu"] * abs(force[0])
