@@ -41,7 +41,7 @@ def test_rcc_chamfer_crossing_agrees_with_the_analytic_tier():
 
 def test_rcc_crossing_with_lateral_and_angular_error_agrees_with_the_analytic_tier():
     """The same with an angular error theta0 = -1 deg (top towards +x, the touching side of the rim
-    lowest): the analytic tier takes theta0 (whitney + rounded_rim). Measured: Fz 18.1 %, Fx 6.6 %
+    lowest): the analytic tier takes theta0 (whitney + rounded_rim). Measured: Fz 10.6 %, Fx 6.2 %
     on the cone (the node-ring argument above; tolerances 25 %, 12 %), 1.0e-5 / 3.9e-5 rolling over
     the edge and 4.4e-5 / 4.3e-5 on the side (tolerance 1e-3); the tilt stays within 0.1 deg of
     theta0 (RCC K_theta 53400 N*mm/rad: measured -1.075 deg at the end). The rim slides over
