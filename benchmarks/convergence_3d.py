@@ -112,8 +112,9 @@ LADDERS = {"wedging_3d": WEDGING,
            "wedging_3d_p2_wall": replace(WEDGING, settings=WALL_NORMAL, resolutions=P2_RESOLUTIONS, order_limit=3.0,
                                          title="3-D wedging on curved quadratic elements, the force along the wall's "
                                                "normal, under mesh refinement"),
-           "insertion_3d_p2_wall": replace(INSERTION, settings=WALL_NORMAL, resolutions=P2_RESOLUTIONS,
-                                           order_limit=3.0,
+           "insertion_3d_p2_wall": replace(INSERTION, settings=WALL_NORMAL, order_limit=3.0,
+                                           resolutions=P2_RESOLUTIONS + (2.0,),  # a fifth rung, 275k unknowns
+                                                                                 # (10 min on 2 ranks)
                                            title="3-D insertion on curved quadratic elements, the force along the "
                                                  "wall's normal, under mesh refinement"),
            "snap_fit_3d": SNAP_FIT}
