@@ -36,8 +36,10 @@ def _label(scene: dict) -> str:
     peg, support = scene["peg"], scene["support"]
     rcc = f"RCC k {support['rcc']['k']:g}, " if support["model"] == "rcc" else ""
     rim = f"rim r {peg['corner_radius']:g}, " if peg["corner_radius"] > 0 else ""
+    size = scene["mesh"]["contact_size"]
+    mesh = f", h_c {size:g} mm" if size > 0 else ""  # the contact elements' size
     return (f"{scene['dim']}-D, {rcc}{rim}eps0 {peg['offset']:g}, th0 {peg['tilt']:g} deg, L_g {support['compliance_centre']:g}, "
-            f"mu {scene['contact']['mu']:g}, D {scene['hole']['width']:g}, E {scene['materials']['hole']['E']:g}")
+            f"mu {scene['contact']['mu']:g}, D {scene['hole']['width']:g}, E {scene['materials']['hole']['E']:g}{mesh}")
 
 
 def _file(spec: dict, default: str) -> str:
