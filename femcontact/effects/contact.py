@@ -125,11 +125,17 @@ def smooth_wall(problem):
     return smooth
 
 
-def _assembled(form) -> np.ndarray:
-    """The vector of a compiled linear form, summed over the ranks, at the local and ghost dofs."""
+def summed_vector(form) -> PETSc.Vec:
+    """The PETSc vector of a compiled linear form, summed over the ranks, its ghosts too."""
     vector = petsc.assemble_vector(form)
     vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    return vector
+
+
+def _assembled(form) -> np.ndarray:
+    """`summed_vector`'s values at the local and ghost dofs."""
+    vector = summed_vector(form)
     with vector.localForm() as local:
         values = local.array.copy()
     vector.destroy()

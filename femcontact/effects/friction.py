@@ -26,6 +26,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from femcontact.effects.base import Effect
+from femcontact.effects.contact import summed_vector
 from femcontact.jit import compile_forms
 from femcontact.physics.coulomb import coulomb_projection, sticks
 from femcontact.physics.rotation import rotation_numpy
@@ -92,12 +93,7 @@ class Friction(Effect):
         node's share of area vanishes (P2 in 3-D: a quadratic triangle's vertex functions
         integrate to zero), the L2 projection of t on the anchors' space instead."""
         p = self.problem
-        vectors = []
-        for form in (self.traction_form, self.area_form):
-            vector = petsc.assemble_vector(form)
-            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            vectors.append(vector)
+        vectors = [summed_vector(form) for form in (self.traction_form, self.area_form)]
         force_vector, area_vector = vectors
         with force_vector.localForm() as force_local, area_vector.localForm() as area_local:
             force = force_local.array.reshape(-1, p.dim).copy()

@@ -15,9 +15,8 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from femcontact.effects.contact import exact_surface_point
+from femcontact.effects.contact import EXACT_SURFACE_RULE, P2_NODE_RULE, exact_surface_point
 from femcontact.families import load_scene
-from femcontact.effects.contact import EXACT_SURFACE_RULE, P2_NODE_RULE
 from femcontact.solver.stepping import Simulation
 
 SCENES = Path(__file__).parents[2] / "scenes"
