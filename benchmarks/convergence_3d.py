@@ -9,7 +9,7 @@ two-point contact), both also with the contact on the hole's exact surface (`con
 "exact"`), the wedging also with quadratic elements on the exact surface (`mesh.degree = 2`,
 resolutions 0.5 to 1.41), both on curved quadratic elements (`mesh.geometry_order = 2`, the same
 rungs), there also with the contact force along the wall's normal (`contact.normal = "wall"`, which
-the insertion scene names; its other ladders set the peg's normal, "body"), and
+both scenes name; their other ladders set the peg's normal, "body"), and
 scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each
 answer in a ladder's quantities: the value on every rung, the Richardson extrapolation of the
 three finest (`femcontact.references.richardson`) with its observed order, the estimated error of
@@ -91,20 +91,25 @@ SNAP_FIT = Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
     "root_stress": "beam stress at the spring's root (MPa)",
 }, order_limit=3.0)
 BODY_NORMAL = {"contact.normal": "'body'"}
-"""The contact force along the rigid body's normal (the insertion scene names the wall's)."""
-LADDERS = {"wedging_3d": WEDGING,
-           "wedging_3d_exact": replace(WEDGING, settings=EXACT, resolutions=RESOLUTIONS,
-                                       title="3-D wedging on the exact hole surface under mesh refinement"),
+"""The contact force along the rigid body's normal (the 3-D wedging and insertion scenes name the wall's)."""
+LADDERS = {"wedging_3d": replace(WEDGING, settings=BODY_NORMAL,
+                                 title="3-D wedging, the force along the peg's normal, under mesh refinement"),
+           "wedging_3d_exact": replace(WEDGING, settings={**EXACT, **BODY_NORMAL}, resolutions=RESOLUTIONS,
+                                       title="3-D wedging on the exact hole surface, the force along the peg's "
+                                             "normal, under mesh refinement"),
            "insertion_3d": replace(INSERTION, settings=BODY_NORMAL,
                                    title="3-D insertion, the force along the peg's normal, under mesh refinement"),
            "insertion_3d_exact": replace(INSERTION, settings={**EXACT, **BODY_NORMAL},
                                          title="3-D insertion on the exact hole surface, the force along the peg's "
                                                "normal, under mesh refinement"),
-           "wedging_3d_p2_exact": replace(WEDGING, settings={**EXACT, "mesh.degree": "2"},
+           "wedging_3d_p2_exact": replace(WEDGING, settings={**EXACT, "mesh.degree": "2", **BODY_NORMAL},
                                           resolutions=P2_RESOLUTIONS, order_limit=3.0,
-                                          title="3-D wedging at P2 on the exact hole surface under mesh refinement"),
-           "wedging_3d_p2_curved": replace(WEDGING, settings=CURVED, resolutions=P2_RESOLUTIONS, order_limit=3.0,
-                                           title="3-D wedging on curved quadratic elements under mesh refinement"),
+                                          title="3-D wedging at P2 on the exact hole surface, the force along the "
+                                                "peg's normal, under mesh refinement"),
+           "wedging_3d_p2_curved": replace(WEDGING, settings={**CURVED, **BODY_NORMAL}, resolutions=P2_RESOLUTIONS,
+                                           order_limit=3.0,
+                                           title="3-D wedging on curved quadratic elements, the force along the "
+                                                 "peg's normal, under mesh refinement"),
            "insertion_3d_p2_curved": replace(INSERTION, settings={**CURVED, **BODY_NORMAL}, resolutions=P2_RESOLUTIONS,
                                              order_limit=3.0,
                                              title="3-D insertion on curved quadratic elements, the force along the "

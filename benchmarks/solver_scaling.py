@@ -2,7 +2,8 @@
 direct and the iterative linear solver (`solver.linear`), on 1 and 2 ranks.
 
 The scene is scenes/wedging_3d.toml (a rigid peg wedged in a stainless block by a moment) at
-mesh resolutions RESOLUTIONS, its first load increment. Each (resolution, solver, ranks) is one
+mesh resolutions RESOLUTIONS, its first load increment, with the contact force along the peg's
+normal (`contact.normal = "body"`, the measured rows' setting). Each (resolution, solver, ranks) is one
 `mpirun -n R python -m benchmarks.solver_scaling --worker RES SOLVER` process: it meshes the
 scene, takes ITERATIONS Newton iterations (assembly, linear solves, line search) and reports
 the unknowns, the first iteration's time (with the factorisation or the multigrid set-up), the
@@ -69,7 +70,7 @@ def measure(resolution: float, solver: str) -> dict:
 
     comm = MPI.COMM_WORLD
     scene = load_scene(SCENE, {"mesh.resolution": resolution, "mesh.max_elements": MAX_ELEMENTS,
-                               "solver.linear": solver, "steps": [LOAD_STEP]})
+                               "solver.linear": solver, "steps": [LOAD_STEP], "contact.normal": "body"})
     start = time.perf_counter()
     simulation = Simulation(scene, comm)
     setup = time.perf_counter() - start
