@@ -8,8 +8,9 @@ released), scenes/insertion_3d.toml (a tilted peg with a rounded rim on complian
 two-point contact), both also with the contact on the hole's exact surface (`contact.surface =
 "exact"`), the wedging also with quadratic elements on the exact surface (`mesh.degree = 2`,
 resolutions 0.5 to 1.41), both on curved quadratic elements (`mesh.geometry_order = 2`, the same
-rungs), there also with the contact force along the wall's normal (`contact.normal = "wall"`, which
-both scenes name; their other ladders set the peg's normal, "body"), and
+rungs), there and on the wedging's linear elements also with the contact force along the wall's
+normal (`contact.normal = "wall"`, which both scenes name; their other ladders set the peg's
+normal, "body"), and
 scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each
 answer in a ladder's quantities: the value on every rung, the Richardson extrapolation of the
 three finest (`femcontact.references.richardson`) with its observed order, the estimated error of
@@ -94,6 +95,8 @@ BODY_NORMAL = {"contact.normal": "'body'"}
 """The contact force along the rigid body's normal (the 3-D wedging and insertion scenes name the wall's)."""
 LADDERS = {"wedging_3d": replace(WEDGING, settings=BODY_NORMAL,
                                  title="3-D wedging, the force along the peg's normal, under mesh refinement"),
+           "wedging_3d_wall": replace(WEDGING, settings={"contact.normal": "'wall'"}, resolutions=RESOLUTIONS,
+                                      title="3-D wedging, the force along the wall's normal, under mesh refinement"),
            "wedging_3d_exact": replace(WEDGING, settings={**EXACT, **BODY_NORMAL}, resolutions=RESOLUTIONS,
                                        title="3-D wedging on the exact hole surface, the force along the peg's "
                                              "normal, under mesh refinement"),
