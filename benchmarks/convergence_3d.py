@@ -62,8 +62,11 @@ EXACT = {"contact.surface": "'exact'"}
 """The contact measured on the hole's exact round surfaces (docs/wedging_3d.md)."""
 CURVED = {"mesh.degree": "2", "mesh.geometry_order": "2"}
 """Quadratic elements with curved (quadratic) geometry: the hole's cylinder and cone to within h^3."""
-WALL_NORMAL = {**CURVED, "contact.normal": "'wall'"}
-"""Curved quadratic elements, the contact force along the hole wall's normal where the wall is smooth."""
+WALL_NORMAL = {"contact.normal": "'wall'"}
+"""The contact force along the hole wall's normal where the wall is smooth (the 3-D wedging and
+insertion scenes name it)."""
+BODY_NORMAL = {"contact.normal": "'body'"}
+"""The contact force along the rigid body's normal."""
 P2_RESOLUTIONS = (0.5, 0.5 * 2 ** 0.5, 1.0, 2 ** 0.5)
 """Rungs of the quadratic ladders: about the unknowns of the linear ones at twice the resolution."""
 
@@ -91,11 +94,9 @@ SNAP_FIT = Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
     "final_contact_force": "contact force on the spring at full insertion (N)",
     "root_stress": "beam stress at the spring's root (MPa)",
 }, order_limit=3.0)
-BODY_NORMAL = {"contact.normal": "'body'"}
-"""The contact force along the rigid body's normal (the 3-D wedging and insertion scenes name the wall's)."""
 LADDERS = {"wedging_3d": replace(WEDGING, settings=BODY_NORMAL,
                                  title="3-D wedging, the force along the peg's normal, under mesh refinement"),
-           "wedging_3d_wall": replace(WEDGING, settings={"contact.normal": "'wall'"}, resolutions=RESOLUTIONS,
+           "wedging_3d_wall": replace(WEDGING, settings=WALL_NORMAL, resolutions=RESOLUTIONS,
                                       title="3-D wedging, the force along the wall's normal, under mesh refinement"),
            "wedging_3d_exact": replace(WEDGING, settings={**EXACT, **BODY_NORMAL}, resolutions=RESOLUTIONS,
                                        title="3-D wedging on the exact hole surface, the force along the peg's "
@@ -117,10 +118,11 @@ LADDERS = {"wedging_3d": replace(WEDGING, settings=BODY_NORMAL,
                                              order_limit=3.0,
                                              title="3-D insertion on curved quadratic elements, the force along the "
                                                    "peg's normal, under mesh refinement"),
-           "wedging_3d_p2_wall": replace(WEDGING, settings=WALL_NORMAL, resolutions=P2_RESOLUTIONS, order_limit=3.0,
+           "wedging_3d_p2_wall": replace(WEDGING, settings={**CURVED, **WALL_NORMAL}, resolutions=P2_RESOLUTIONS,
+                                         order_limit=3.0,
                                          title="3-D wedging on curved quadratic elements, the force along the wall's "
                                                "normal, under mesh refinement"),
-           "insertion_3d_p2_wall": replace(INSERTION, settings=WALL_NORMAL, order_limit=3.0,
+           "insertion_3d_p2_wall": replace(INSERTION, settings={**CURVED, **WALL_NORMAL}, order_limit=3.0,
                                            resolutions=P2_RESOLUTIONS + (2.0,),  # a fifth rung, 275k unknowns
                                                                                  # (10 min on 2 ranks)
                                            title="3-D insertion on curved quadratic elements, the force along the "
