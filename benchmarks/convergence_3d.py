@@ -15,8 +15,9 @@ scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). F
 answer in a ladder's quantities: the value on every rung, the Richardson extrapolation of the
 three finest (`femcontact.references.richardson`) with its observed order, the estimated error of
 the finest rung, |finest - extrapolated| / |extrapolated| (at an observed order above the
-discretisation's, that order with a factor of safety 3: `finest_error`), and the spread of the
-three finest rungs (largest - smallest) / finest. A rung whose result.json exists is read, not run
+discretisation's, that order with a factor of safety 3: `finest_error`; where the rungs do not
+converge monotonically, 3 x the spread: `range_error`), and the spread of the three finest rungs
+(largest - smallest) / finest. A rung whose result.json exists is read, not run
 again (delete results/convergence_3d/LADDER/r<resolution> to re-run it). Writes
 results/convergence_3d/convergence_3d.md and .json after every rung.
 
@@ -33,7 +34,7 @@ from femcontact.errors import InputError
 from femcontact.families.repository import SCENES
 from femcontact.io import read_result, write_json_atomic, write_text_atomic
 from femcontact.outputs.tables import markdown_table
-from femcontact.references.richardson import SAFETY_FACTOR, finest_error, richardson
+from femcontact.references.richardson import RANGE_FACTOR, SAFETY_FACTOR, finest_error, range_error, richardson
 
 from benchmarks.whole_process import run_scene
 
@@ -168,18 +169,26 @@ def extrapolation(name: str, rows: list[dict]) -> list[dict]:
         series = [r[key] for r in done]
         series = series[max((i + 1 for i, v in enumerate(series) if v is None), default=0):]  # the rungs after a gap
         error, error_order = finest_error(series, ratio, ladder.order_limit)
+        how = "capped" if error is not None and error_order < order else "richardson"
+        if error is None:
+            error, how = range_error(finest), "range"
         spread = (max(finest) - min(finest)) / abs(finest[-1]) if finest[-1] else None
         out.append({"quantity": key, "meaning": meaning, "finest": finest[-1], "limit": limit, "order": order,
-                    "error": error, "capped": error is not None and error_order < order, "spread": spread})
+                    "error": error, "how": how, "spread": spread})
     return out
 
 
 def error_text(entry: dict, order_limit: float) -> str:
-    """A table cell: the estimated error, how it was estimated where the order was capped, or why none."""
+    """A table cell: the estimated error, and how it was estimated unless by Richardson at the observed order."""
     if entry["error"] is None:
+        return "-"
+    if entry["how"] == "capped":
+        return f"{entry['error']:.2%} (order {order_limit:g}, x{SAFETY_FACTOR:g})"
+    if entry["how"] == "range":
         converging = math.isfinite(entry["order"]) and entry["order"] > 0
-        return "coarser rungs out of step" if converging else "not converging"
-    return f"{entry['error']:.2%}" + (f" (order {order_limit:g}, x{SAFETY_FACTOR:g})" if entry["capped"] else "")
+        return f"{entry['error']:.2%} ({RANGE_FACTOR:g} x spread: " + \
+            ("coarser rungs out of step)" if converging else "not monotone)")
+    return f"{entry['error']:.2%}"
 
 
 def report(name: str, rows: list[dict]) -> str:
@@ -211,9 +220,11 @@ def report(name: str, rows: list[dict]) -> str:
                   f"the three finest rungs line up at an order above the discretisation's "
                   f"({ladder.order_limit:g}), {SAFETY_FACTOR:g} |finest - next| / (ratio^{ladder.order_limit:g} - 1) "
                   "/ |finest| (the discretisation's order and a factor of safety of 3, as Roache's grid "
-                  "convergence index does). Spread: (largest - smallest) / finest over the three finest "
-                  "rungs; where they do not converge monotonically (no positive observed order), it is what "
-                  "the mesh still moves the answer by, not an error bound.", ""]
+                  "convergence index does). Where the rungs do not converge that way (they alternate, or a "
+                  f"coarser rung moves the other way or by less), {RANGE_FACTOR:g} x the spread: Eca and "
+                  "Hoekstra's uncertainty for oscillatory convergence, 3 x the range of the values, here over "
+                  "the three finest rungs. Spread: (largest - smallest) / finest over the three finest "
+                  "rungs.", ""]
     return "\n".join(lines)
 
 

@@ -1,5 +1,6 @@
 """Richardson extrapolation: the mesh-converged value a convergence study measures its errors
-against (`make accuracy`'s rows of every family)."""
+against (`make accuracy`'s rows of every family), and the discretisation error of the finest mesh
+where the meshes converge monotonically (`finest_error`) or do not (`range_error`)."""
 import math
 
 
@@ -37,3 +38,17 @@ def finest_error(values: list[float], ratio: float, formal_order: float) -> tupl
     if order <= formal_order:
         return (abs(f3 - limit) / abs(limit) if limit else None), order
     return SAFETY_FACTOR * abs(f3 - f2) / (ratio ** formal_order - 1) / abs(f3), formal_order
+
+
+RANGE_FACTOR = 3.0
+"""The factor on the data range where the meshes do not converge monotonically: Eca and
+Hoekstra's uncertainty for oscillatory convergence and anomalous behaviour, U = 3 Delta_M
+(J. Mar. Sci. Technol., doi:10.1007/s00773-008-0018-1, appendix 1)."""
+
+
+def range_error(values: list[float]) -> float | None:
+    """The relative uncertainty of the finest of `values` (coarsest first) where they do not
+    converge monotonically: 3 (largest - smallest) / |finest| over the values given. Eca and
+    Hoekstra take the range over every mesh of a study; pass the meshes an estimate stands on
+    (the three finest). None where the finest is 0."""
+    return RANGE_FACTOR * (max(values) - min(values)) / abs(values[-1]) if values[-1] else None

@@ -15,6 +15,7 @@ from pathlib import Path
 from femcontact.families.repository import STUDIES
 from femcontact.io import read_csv
 from femcontact.outputs.tables import markdown_table
+from femcontact.references.richardson import range_error
 
 STUDY_NAMES = ("dislodging_methods_2d", "dislodging_methods_3d", "dislodging_methods_frequency")
 """The studies gathered (studies/NAME.toml)."""
@@ -141,6 +142,25 @@ def rows_3d(cases, degrees) -> list[dict]:
                             "over_friction_torque": m[f"{prefix}_over_friction_torque"],
                             "over_wedging_moment": m.get(f"{prefix}_over_wedging_moment", ""),
                             "solves": m[f"{prefix}_solves"], "time_s": m[f"{prefix}_time_s"], **common})
+    return out
+
+
+def errors_3d(three: list[dict]) -> list[dict]:
+    """Each 3-D threshold (and the pull's degree of wedging) on the three finest meshes, with the
+    finest value's discretisation error: 3 x their spread (`range_error`; the meshes are not
+    refined by one ratio, so there is no Richardson estimate)."""
+    out = []
+    for method in dict.fromkeys(r["method"] for r in three):
+        rows = sorted((r for r in three if r["method"] == method), key=lambda r: r["mesh.resolution"])[-3:]
+        for key in ("threshold_force_N", "threshold_moment_Nmm", "degree_of_wedging"):
+            values = [r.get(key) for r in rows]
+            if len(rows) < 3 or any(v in (None, "") for v in values):
+                continue
+            error = range_error(values)
+            out.append({"method": method, "quantity": key,
+                        "mesh.resolution": ", ".join(f"{r['mesh.resolution']:g}" for r in rows),
+                        "values": ", ".join(f"{v:.4g}" for v in values), "finest": f"{values[-1]:.4g}",
+                        "estimated_error": f"{error:.1%}" if error is not None else ""})
     return out
 
 
@@ -329,6 +349,12 @@ def write(cases: dict[str, list[tuple]], out: Path) -> None:
             "method", "mesh.resolution", "threshold_force_N", "threshold_moment_Nmm", "sum_normal_N", "degree_of_wedging",
             "estimate_2d_one_dof_first_slip_N", "estimate_2d_twin_degree_N", "threshold_over_2d_twin_estimate",
             "over_friction_torque", "over_wedging_moment") if any(c in r for r in three)])
+        errors = errors_3d(three)
+        if errors:
+            lines += ["", "## 3-D thresholds: discretisation error", "",
+                      "On the three finest meshes; the error of the finest is 3 x their spread (largest - "
+                      "smallest) / finest, Eca and Hoekstra's uncertainty where meshes do not converge "
+                      "monotonically.", ""] + _table(errors, list(errors[0]))
     lines += ["", "Plots: " + ", ".join(p.name for p in paths)]
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print(f"dislodging_methods: {len(degrees)} wedged states, {len(methods)} methods, "
