@@ -10,7 +10,8 @@ two-point contact), both also with the contact on the hole's exact surface (`con
 resolutions 0.5 to 1.41), both on curved quadratic elements (`mesh.geometry_order = 2`, the same
 rungs), there and on the wedging's linear elements also with the contact force along the wall's
 normal (`contact.normal = "wall"`, which both scenes name; their other ladders set the peg's
-normal, "body"), and
+normal, "body"), the chamfer crossing of the tilted peg on the RCC (the second case of
+studies/insertion_3d.toml) on curved quadratic elements along the wall's normal, and
 scenes/snap_fit_3d.toml (a pin pushed past a cantilever spring and withdrawn). For each
 answer in a ladder's quantities: the value on every rung, the Richardson extrapolation of the
 three finest (`femcontact.references.richardson`) with its observed order, the estimated error of
@@ -88,6 +89,21 @@ INSERTION = Ladder("insertion_3d.toml", "3-D insertion under mesh refinement", {
     "insert.contact_B_force": "contact force at B (the rim) at s = 4.45 mm (N)",
     "insert.tilt_xz_deg": "tilt at s = 4.45 mm (deg)",
 })
+CROSSING = Ladder("insertion_3d.toml", "3-D chamfer crossing on the RCC under mesh refinement", {
+    "chamfer_peak_force": "crossing peak (N)",
+    "cone.support_Fz": "insertion force at the end of step cone, rolling over the edge (N)",
+    "cone.support_Fx": "lateral force at the end of step cone (N)",
+    "edge.support_Fz": "insertion force at the end of step edge, on the wall (N)",
+})
+RCC_CROSSING = {"support.model": "'rcc'", "support.rcc": "{b=55.0, peg_length=50.0, theta_l=70.0, k=20.0}",
+                "support.compliance_centre": "20.0", "peg.offset": "0.6", "peg.tilt": "-1.0",
+                "peg.insertion_depth": "0.9", "mesh.contact_zone": "3.0",
+                "steps": "[{name='cone', increments=9, support_motion={z=-0.45}}, "
+                         "{name='edge', increments=7, support_motion={z=-1.15}}, "
+                         "{name='side', increments=4, support_motion={z=-2.35}, "
+                         "stop={column='support_Fz', value=100.0}}]"}
+"""The second case of studies/insertion_3d.toml: the rounded rim of a peg on the Draper-like RCC,
+0.6 mm off the axis and tilted -1 deg, across the chamfer, over its edge and down the wall."""
 SNAP_FIT = Ladder("snap_fit_3d.toml", "3-D snap fit under mesh refinement", {
     "peak_insertion_force": "peak insertion force (N)",
     "max_insertion_slope": "insertion force per mm of travel (N/mm)",
@@ -128,6 +144,11 @@ LADDERS = {"wedging_3d": replace(WEDGING, settings=BODY_NORMAL,
                                                                                  # (10 min on 2 ranks)
                                            title="3-D insertion on curved quadratic elements, the force along the "
                                                  "wall's normal, under mesh refinement"),
+           "insertion_3d_rcc_p2_wall": replace(CROSSING, settings={**RCC_CROSSING, **CURVED, **WALL_NORMAL},
+                                               resolutions=P2_RESOLUTIONS + (2.0,), order_limit=3.0,
+                                               title="3-D chamfer crossing on the RCC on curved quadratic "
+                                                     "elements, the force along the wall's normal, under mesh "
+                                                     "refinement"),
            "snap_fit_3d": SNAP_FIT}
 
 

@@ -158,10 +158,10 @@ CONTACT = {
                      "centroids; docs/wedging_3d.md)",
                      choices=("facets", "exact")),
     "normal": Field("str", "body", "direction of the contact force: 'body' (the rigid body's surface normal at "
-                    "each contact point) or 'wall' (the deformable wall's normal where the wall is smooth, the "
-                    "body's at the wall's edges and corners and where the two lie more than 45 deg apart: a rounded "
-                    "rim or a sharp edge pressing a smooth wall pushes along the wall's normal, whichever contact "
-                    "points see it; docs/wedging_3d.md)",
+                    "each contact point) or 'wall' (the deformable wall's normal where the wall is smooth; at its "
+                    "edges the body's turned into the directions between the two faces' normals; the body's where "
+                    "the two lie more than 45 deg apart: a rounded rim or a sharp edge pressing a smooth wall "
+                    "pushes along the wall's normal, whichever contact points see it; docs/wedging_3d.md)",
                     choices=("body", "wall")),
 }
 

@@ -12,10 +12,14 @@ inside the hole by up to h^2/(8R), no longer touch the peg, and the contact can 
 at more points than the facets' vertices.
 
 With `contact.normal = "wall"` the force acts along the wall's normal (`wall_normal`) wherever
-the wall is smooth (`smooth_wall`) and along the body's at the wall's edges: a rigid edge or a
-rounded rim pressing a smooth wall pushes along the wall's normal, while the wall's nodes that
-sample it see the body's flank or rounding, whose normal leans by their position on it. Where a
-wall sinks round the body's edge onto its next face (the two normals more than WALL_BODY_ANGLE
+the wall is smooth (`smooth_wall`): a rigid edge or a rounded rim pressing a smooth wall pushes
+along the wall's normal, while the wall's nodes that sample it see the body's flank or rounding,
+whose normal leans by their position on it. At the wall's edges the force acts along the body's
+normal turned into the edge's normal cone (`edge_normals`, `into_arc`), the directions between
+the normals of the two faces that meet there: a rounded rim rolling over the edge pushes along
+its own normal, but a node on the edge that samples a rim still on one face, a fraction of a
+millimetre away, sees the rim's normal turned past that face's and takes the face's. Where a wall
+sinks round the body's edge onto its next face (the two normals more than WALL_BODY_ANGLE
 apart), the body's normal is kept.
 
 The rules below put the contact points on the facets' nodes (`Problem.contact_measure`).
@@ -75,9 +79,10 @@ so its contact is seen where Gauss points inside the facets would let it penetra
 SMOOTH_WALL_ANGLE = np.radians(20.0)
 """A boundary node whose facets' normals all lie within this angle of their mean is on a smooth
 part of the wall (a cylinder's facets meet at h/R, a chamfer's edge at 45 deg, a mouth at 90)."""
-SMOOTH_POINT = 0.75
-"""A contact point takes the wall's normal where `smooth_wall`, interpolated linearly, exceeds
-this: at the wall's smooth nodes and between them, not next to an edge node."""
+SMOOTH_POINT = 0.5
+"""A contact point takes the wall's normal where `smooth_wall` exceeds this: at the smooth nodes
+of the wall's facets and inside its faces (a facet's centroid beside an edge: at least 7/9), not
+on an edge."""
 WALL_BODY_ANGLE = np.radians(45.0)
 """A contact point takes the wall's normal only where it lies within this angle of the body's: a
 rim pressing the wall (the body's normal off by its tilt or rounding) does; a wall wrapped round
@@ -89,8 +94,13 @@ def wall_normal(problem, exact: bool):
     deformation (Nanson: F^-T N). On an exact surface of revolution (`exact_surface_point`) the
     flat facet's normal keeps its slope along the axis and points across it radially, as the
     cylinder's or cone's own does."""
+    return deformed_normal(problem, ufl.FacetNormal(problem.mesh), exact)
+
+
+def deformed_normal(problem, N, exact: bool):
+    """The reference unit normal N (UFL) of the deformable body turned by its deformation
+    (Nanson: F^-T N), made radial on an exact surface of revolution as in `wall_normal`."""
     mesh, dim = problem.mesh, problem.dim
-    N = ufl.FacetNormal(mesh)
     if exact:
         revolution = problem.model.revolution
         a = ufl.as_vector(list(revolution["direction"]))
@@ -104,25 +114,84 @@ def wall_normal(problem, exact: bool):
     return n / ufl.sqrt(ufl.dot(n, n))
 
 
-def smooth_wall(problem):
-    """1 at the boundary nodes where the deformable body's surface is smooth, 0 at its edges
-    and corners (a node where some boundary facet's normal lies more than SMOOTH_WALL_ANGLE
-    from the facets' mean normal there), as a P1 function."""
+def into_arc(n, a, b):
+    """The unit vector n (UFL) turned into the arc of directions from the unit vector a to b (less
+    than 180 deg apart): n itself where it lies between them, else the nearer end. Where a and b
+    nearly coincide (less than 0.5 deg apart), a."""
+    across = b - ufl.dot(b, a) * a  # towards b, square to a
+    back = a - ufl.dot(a, b) * b  # towards a, square to b
+    width2 = ufl.dot(across, across)
+    inside = ufl.conditional(ufl.lt(ufl.dot(n, across), 0), a, ufl.conditional(ufl.lt(ufl.dot(n, back), 0), b, n))
+    return ufl.conditional(ufl.lt(width2, np.sin(np.radians(0.5)) ** 2), a, inside)
+
+
+def edge_normals(problem) -> tuple:
+    """The two ends of the deformable body's normal cone at the nodes of its boundary facets, as
+    quadratic vector functions (unit, reference configuration; quadratic so that an edge
+    midpoint inside a face gets that face's normal, not its end nodes' mix): at a point on an
+    edge the mean normals of the facets on either side of it, at a point inside a face its
+    normal twice. The facets at a point are split by their normal's component along
+    EDGE_SIDE_ORDER, above or below their mean's, so the face nearer the hole's axis comes
+    first at every point of an edge. Sums over facets, so every rank gets the same values at a
+    shared point."""
     mesh, dim = problem.mesh, problem.dim
-    nodal = ({"quadrature_rule": "GLL", "quadrature_degree": 1} if dim == 2
-             else {"quadrature_rule": "custom", "quadrature_degree": 1, **VERTEX_RULE})
-    ds = ufl.Measure("ds", domain=mesh, metadata=nodal)
-    N = ufl.FacetNormal(mesh)
-    mean = fem.Function(fem.VectorFunctionSpace(mesh, ("CG", 1)))
-    smooth = fem.Function(fem.FunctionSpace(mesh, ("CG", 1)), name="smooth_wall")
-    apart = ufl.conditional(ufl.lt(ufl.dot(N, mean), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
-    mean_form, apart_form = compile_forms([ufl.dot(N, ufl.TestFunction(mean.function_space)) * ds,
-                                           apart * ufl.TestFunction(smooth.function_space) * ds])
-    mean.x.array[:] = _assembled(mean_form)
-    vectors = mean.x.array.reshape(-1, dim)
-    vectors /= np.maximum(np.linalg.norm(vectors, axis=1), 1e-300)[:, None]
+    ds, N, m = _nodal_measure(mesh), ufl.FacetNormal(mesh), mean_normal(mesh)
+    q = ufl.TestFunction(m.function_space)
+    order = ufl.as_vector(EDGE_SIDE_ORDER[dim])
+    upper = ufl.conditional(ufl.ge(ufl.dot(N - m, order), 0), 1.0, 0.0)
+    out = []
+    for form in compile_forms([upper * ufl.dot(N, q) * ds, (1 - upper) * ufl.dot(N, q) * ds]):
+        side = _assembled(form).reshape(-1, dim)
+        empty = np.linalg.norm(side, axis=1) < 1e-300  # every facet on the other side: a smooth point
+        side[empty] = m.x.array.reshape(-1, dim)[empty]
+        out.append(fem.Function(m.function_space))
+        out[-1].x.array[:] = _unit_rows(side.reshape(-1), dim)
+    return tuple(out)
+
+
+NODE_RULES = {2: {"quadrature_rule": "custom", "quadrature_degree": 2, "quadrature_points": [[0.0], [1.0], [0.5]],
+                  "quadrature_weights": [1 / 6, 1 / 6, 2 / 3]},
+              3: {"quadrature_rule": "custom", "quadrature_degree": 2, **EXACT_SURFACE_RULE}}
+"""Boundary points at the nodes of a quadratic facet (its vertices and edge midpoints), positive
+weights, for sums over the facets at each node."""
+EDGE_SIDE_ORDER = {2: (0.3, 0.954), 3: (0.1, 0.3, 0.949)}
+"""A direction near the hole's axis (y in 2-D, z in 3-D) that tells the two faces at an edge
+apart: their normals' components along it differ at every edge of the built geometries (an edge
+whose faces' normals had equal components would not be split, and take its mean normal)."""
+
+
+def _nodal_measure(mesh):
+    """The boundary measure with its points at the nodes of quadratic facets (NODE_RULES)."""
+    return ufl.Measure("ds", domain=mesh, metadata=NODE_RULES[mesh.geometry.dim])
+
+
+def _unit_rows(values: np.ndarray, dim: int) -> np.ndarray:
+    """A flat array of dim-vectors, each scaled to unit length (a zero one left zero)."""
+    rows = values.reshape(-1, dim)
+    return (rows / np.maximum(np.linalg.norm(rows, axis=1), 1e-300)[:, None]).reshape(-1)
+
+
+def smooth_wall(problem):
+    """1 at the nodes of the boundary facets where the deformable body's surface is smooth, 0 on
+    its edges and corners (a point where some boundary facet's normal lies more than
+    SMOOTH_WALL_ANGLE from the facets' mean normal there), as a quadratic function: at a facet's
+    vertices and edge midpoints the value of that point, so a midpoint inside a face is smooth
+    beside an edge."""
+    mesh = problem.mesh
+    smooth = fem.Function(fem.FunctionSpace(mesh, ("CG", 2)), name="smooth_wall")
+    apart = ufl.conditional(ufl.lt(ufl.dot(ufl.FacetNormal(mesh), mean_normal(mesh)), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
+    apart_form, = compile_forms([apart * ufl.TestFunction(smooth.function_space) * _nodal_measure(mesh)])
     smooth.x.array[:] = np.where(_assembled(apart_form) > 0, 0.0, 1.0)
     return smooth
+
+
+def mean_normal(mesh):
+    """The unit mean of the boundary facets' outward normals at the nodes of the boundary facets
+    (vertices and edge midpoints), as a quadratic vector function (0 inside)."""
+    mean = fem.Function(fem.VectorFunctionSpace(mesh, ("CG", 2)))
+    form, = compile_forms([ufl.dot(ufl.FacetNormal(mesh), ufl.TestFunction(mean.function_space)) * _nodal_measure(mesh)])
+    mean.x.array[:] = _unit_rows(_assembled(form), mesh.geometry.dim)
+    return mean
 
 
 def summed_vector(form) -> PETSc.Vec:
@@ -161,7 +230,10 @@ class NormalContact(Effect):
             wall = -wall_normal(problem, exact)
             along_wall = ufl.And(ufl.gt(smooth_wall(problem), SMOOTH_POINT),
                                  ufl.gt(ufl.dot(wall, normal), np.cos(WALL_BODY_ANGLE)))
-            normal = ufl.conditional(along_wall, wall, normal)
+            side_a, side_b = (-deformed_normal(problem, n, exact) for n in edge_normals(problem))
+            at_edge = into_arc(normal, side_a, side_b)
+            at_edge = ufl.conditional(ufl.gt(ufl.dot(at_edge, normal), np.cos(WALL_BODY_ANGLE)), at_edge, normal)
+            normal = ufl.conditional(along_wall, wall, at_edge)
             normal_local = rigid.to_local_direction(normal, rigid.variable)
         p_sigma = ufl.dot(problem.stress * ufl.FacetNormal(problem.mesh), normal)
         gamma_n = c["gamma"] * c["E"] / cell_diameter(problem.mesh)

@@ -2,6 +2,7 @@
 rungs: a quantity f(h) = f0 + C h^2 on meshes refined by sqrt(2) is extrapolated to f0 with
 order 2, and the finest rung's error is |f(h_finest) - f0| / f0; a failed rung is left out."""
 import math
+from pathlib import Path
 
 import pytest
 
@@ -140,3 +141,15 @@ def test_the_3d_dislodging_thresholds_carry_three_times_the_spread_of_their_fine
         ("threshold_force_N", "1, 1.5, 2", f"{3 * (10.814 - 10.481) / 10.481:.1%}"),
         ("degree_of_wedging", "1, 1.5, 2", f"{3 * (0.3627 - 0.3599) / 0.3599:.1%}")]
     assert rows[0]["estimated_error"] == "9.5%"
+
+
+def test_the_crossing_ladder_refines_the_study_s_tilted_rcc_case():
+    """The ladder insertion_3d_rcc_p2_wall runs the second case of studies/insertion_3d.toml, key
+    by key, on curved quadratic elements along the wall's normal."""
+    import tomllib
+
+    study = tomllib.loads((Path(__file__).parents[2] / "studies" / "insertion_3d.toml").read_text())
+    settings = convergence_3d.LADDERS["insertion_3d_rcc_p2_wall"].settings
+    parsed = {key: tomllib.loads(f"v = {value}")["v"] for key, value in settings.items()}
+    assert {key: parsed[key] for key in study["sweep"]["cases"][1]} == study["sweep"]["cases"][1]
+    assert (parsed["mesh.degree"], parsed["mesh.geometry_order"], parsed["contact.normal"]) == (2, 2, "wall")

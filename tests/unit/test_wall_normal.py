@@ -11,6 +11,9 @@ wall's normal the rigid body's tangential reaction is zero to round-off wherever
 points sit under it; along the rigid body's normal each point's force tilts by its offset over
 the body's radius, and the sum keeps what the points' asymmetry leaves. On a round hole's exact
 surface (`contact.surface = "exact"`) the wall's normal is the cylinder's or cone's own.
+
+At an edge of the wall the force takes the body's normal turned into the edge's normal cone, the
+arc between the two faces' normals (`edge_normals`, `into_arc`).
 """
 from pathlib import Path
 
@@ -21,7 +24,7 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from femcontact.effects.contact import smooth_wall, wall_normal
+from femcontact.effects.contact import edge_normals, into_arc, smooth_wall, wall_normal
 from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
@@ -43,6 +46,35 @@ def edge_nodes(mesh) -> np.ndarray:
     return x[smooth.x.array[:owned] == 0.0]
 
 
+def test_an_edge_s_normal_cone_spans_its_two_faces():
+    """At the nodes on the lower edge of the round hole's chamfer (r = 5.05 mm, z = -1 mm) the two
+    ends of the normal cone are the chamfer's and the wall's outward normals (up the cone at
+    45 deg into the hole, and radially in), to within the facets' turn about the axis (1 mm
+    contact elements on R = 5.05 mm: up to h / 2R, 0.1 rad)."""
+    scene = load_scene(SCENES / "insertion_3d.toml", ["mesh.contact_size=1.0", "mesh.contact_zone=3.0"])
+    upper, lower = edge_normals(Simulation(scene, MPI.COMM_SELF).problem)
+    x = upper.function_space.tabulate_dof_coordinates()
+    r = np.hypot(x[:, 0], x[:, 1])
+    on_edge = np.isclose(r, 5.05, atol=1e-6) & np.isclose(x[:, 2], -1.0, atol=1e-6)
+    assert on_edge.sum() >= 10
+    inward = -x[on_edge, :2] / r[on_edge, None]
+    cone = np.column_stack([inward, np.ones(on_edge.sum())]) / np.sqrt(2)
+    wall = np.column_stack([inward, np.zeros(on_edge.sum())])
+    for side, face in ((upper, cone), (lower, wall)):
+        cosines = np.sum(side.x.array.reshape(-1, 3)[on_edge] * face, axis=1)
+        assert np.arccos(np.clip(cosines, -1, 1)).max() < 0.1
+
+
+@pytest.mark.parametrize("tilt_deg, expected_deg", [(-10.0, 0.0), (20.0, 20.0), (60.0, 45.0), (100.0, 45.0)])
+def test_a_normal_beyond_an_edge_s_faces_takes_the_nearer_face_s(tilt_deg, expected_deg):
+    """The arc from a (the x axis) to b (45 deg towards y): a normal inside it is kept, one beyond
+    either end takes that end."""
+    a, b = ufl.as_vector([1.0, 0.0]), ufl.as_vector([np.sqrt(0.5), np.sqrt(0.5)])
+    t = np.radians(tilt_deg)
+    turned = into_arc(ufl.as_vector([np.cos(t), np.sin(t)]), a, b)
+    assert np.degrees(np.arctan2(float(turned[1]), float(turned[0]))) == pytest.approx(expected_deg, abs=1e-12)
+
+
 def test_a_square_has_edges_at_its_corners():
     square = dmesh.create_unit_square(MPI.COMM_WORLD, 4, 4)
     corners = edge_nodes(square)[:, :2]
@@ -54,7 +86,7 @@ def test_a_cube_has_edges_along_its_edges():
     cube = dmesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2)
     found = np.concatenate(MPI.COMM_WORLD.allgather(edge_nodes(cube)))
     on_two_faces = (np.isclose(found, 0) | np.isclose(found, 1)).sum(axis=1) >= 2
-    assert len(found) == 8 + 12 and on_two_faces.all()
+    assert len(found) == 8 + 12 * 3 and on_two_faces.all()  # per edge its middle vertex and two midpoints
 
 
 @pytest.mark.parametrize("bend_deg, smooth", [(16.0, True), (50.0, False)])
