@@ -3,7 +3,14 @@ scenes/wedging_3d.toml on a coarse mesh (resolution 0.35), couple and release, o
 against each rank alone on MPI.COMM_SELF: with the peg's rims rounded (`peg.corner_radius` =
 1 mm), with the contact on the hole's exact surface (`contact.surface`: its nodes marked on
 each rank), and with the iterative linear solver (its multigrid aggregates differ between the
-partitions; each solve stops at 1e-6 of its right-hand side, each run at Newton's tolerance)."""
+partitions; each solve stops at 1e-6 of its right-hand side, each run at Newton's tolerance).
+
+The couple in 10 increments, where the scene takes 5: on the exact surface at this mesh the
+scene's third increment (0.2 of the couple) can land on another wedged state, depending on
+round-off (measured: one rank -84.61 N at A under the couple, tilt 1.2889 deg; two ranks
+-81.80 N, 1.2728 deg). With 10 and 20 increments one and two ranks agree (-81.75 and -81.76 N,
+1.2728 deg), on the two-rank state of 5 increments: the quasi-static path
+(docs/wedging_3d.md, "Missing")."""
 from pathlib import Path
 
 import pytest
@@ -17,7 +24,7 @@ COLUMNS = ("contact_A_Fx", "contact_A_Fz", "contact_B_Fx", "contact_B_Fz", "cont
 
 
 def run(comm, overrides) -> dict:
-    simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.35", *overrides]), comm)
+    simulation = Simulation(load_scene(SCENE, ["mesh.resolution=0.35", "steps.0.increments=10", *overrides]), comm)
     simulation.run()
     return simulation.step_end_rows()
 
