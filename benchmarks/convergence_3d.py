@@ -35,7 +35,7 @@ from femcontact.errors import InputError
 from femcontact.families.repository import SCENES
 from femcontact.io import read_result, write_json_atomic, write_text_atomic
 from femcontact.outputs.tables import markdown_table
-from femcontact.references.richardson import RANGE_FACTOR, SAFETY_FACTOR, finest_error, range_error, richardson
+from femcontact.references.richardson import RANGE_FACTOR, SAFETY_FACTOR, finest_error, range_error, richardson, spread
 
 from benchmarks.whole_process import run_scene
 
@@ -193,9 +193,8 @@ def extrapolation(name: str, rows: list[dict]) -> list[dict]:
         how = "capped" if error is not None and error_order < order else "richardson"
         if error is None:
             error, how = range_error(finest), "range"
-        spread = (max(finest) - min(finest)) / abs(finest[-1]) if finest[-1] else None
         out.append({"quantity": key, "meaning": meaning, "finest": finest[-1], "limit": limit, "order": order,
-                    "error": error, "how": how, "spread": spread})
+                    "error": error, "how": how, "spread": spread(finest)})
     return out
 
 

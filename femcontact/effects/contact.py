@@ -125,26 +125,27 @@ def into_arc(n, a, b):
     return ufl.conditional(ufl.lt(width2, np.sin(np.radians(0.5)) ** 2), a, inside)
 
 
-def edge_normals(problem) -> tuple:
+def edge_normals(mean) -> tuple:
     """The two ends of the deformable body's normal cone at the nodes of its boundary facets, as
     quadratic vector functions (unit, reference configuration; quadratic so that an edge
     midpoint inside a face gets that face's normal, not its end nodes' mix): at a point on an
     edge the mean normals of the facets on either side of it, at a point inside a face its
     normal twice. The facets at a point are split by their normal's component along
-    EDGE_SIDE_ORDER, above or below their mean's, so the face nearer the hole's axis comes
-    first at every point of an edge. Sums over facets, so every rank gets the same values at a
-    shared point."""
-    mesh, dim = problem.mesh, problem.dim
-    ds, N, m = _nodal_measure(mesh), ufl.FacetNormal(mesh), mean_normal(mesh)
-    q = ufl.TestFunction(m.function_space)
+    EDGE_SIDE_ORDER, above or below their mean's (`mean`, from `mean_normal`), so the face nearer
+    the hole's axis comes first at every point of an edge. Sums over facets, so every rank gets
+    the same values at a shared point."""
+    mesh = mean.function_space.mesh
+    dim = mesh.geometry.dim
+    ds, N = _nodal_measure(mesh), ufl.FacetNormal(mesh)
+    q = ufl.TestFunction(mean.function_space)
     order = ufl.as_vector(EDGE_SIDE_ORDER[dim])
-    upper = ufl.conditional(ufl.ge(ufl.dot(N - m, order), 0), 1.0, 0.0)
+    upper = ufl.conditional(ufl.ge(ufl.dot(N - mean, order), 0), 1.0, 0.0)
     out = []
     for form in compile_forms([upper * ufl.dot(N, q) * ds, (1 - upper) * ufl.dot(N, q) * ds]):
         side = _assembled(form).reshape(-1, dim)
         empty = np.linalg.norm(side, axis=1) < 1e-300  # every facet on the other side: a smooth point
-        side[empty] = m.x.array.reshape(-1, dim)[empty]
-        out.append(fem.Function(m.function_space))
+        side[empty] = mean.x.array.reshape(-1, dim)[empty]
+        out.append(fem.Function(mean.function_space))
         out[-1].x.array[:] = _unit_rows(side.reshape(-1), dim)
     return tuple(out)
 
@@ -171,15 +172,15 @@ def _unit_rows(values: np.ndarray, dim: int) -> np.ndarray:
     return (rows / np.maximum(np.linalg.norm(rows, axis=1), 1e-300)[:, None]).reshape(-1)
 
 
-def smooth_wall(problem):
+def smooth_wall(mean):
     """1 at the nodes of the boundary facets where the deformable body's surface is smooth, 0 on
     its edges and corners (a point where some boundary facet's normal lies more than
-    SMOOTH_WALL_ANGLE from the facets' mean normal there), as a quadratic function: at a facet's
-    vertices and edge midpoints the value of that point, so a midpoint inside a face is smooth
-    beside an edge."""
-    mesh = problem.mesh
+    SMOOTH_WALL_ANGLE from the facets' mean normal `mean` there, from `mean_normal`), as a
+    quadratic function: at a facet's vertices and edge midpoints the value of that point, so a
+    midpoint inside a face is smooth beside an edge."""
+    mesh = mean.function_space.mesh
     smooth = fem.Function(fem.FunctionSpace(mesh, ("CG", 2)), name="smooth_wall")
-    apart = ufl.conditional(ufl.lt(ufl.dot(ufl.FacetNormal(mesh), mean_normal(mesh)), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
+    apart = ufl.conditional(ufl.lt(ufl.dot(ufl.FacetNormal(mesh), mean), np.cos(SMOOTH_WALL_ANGLE)), 1.0, 0.0)
     apart_form, = compile_forms([apart * ufl.TestFunction(smooth.function_space) * _nodal_measure(mesh)])
     smooth.x.array[:] = np.where(_assembled(apart_form) > 0, 0.0, 1.0)
     return smooth
@@ -227,10 +228,10 @@ class NormalContact(Effect):
         normal_local = ufl.diff(gap, xi)
         normal = rigid.to_global_direction(normal_local, rigid.variable)
         if scene["contact"]["normal"] == "wall":  # the wall pushes along its own normal where smooth
-            wall = -wall_normal(problem, exact)
-            along_wall = ufl.And(ufl.gt(smooth_wall(problem), SMOOTH_POINT),
+            wall, mean = -wall_normal(problem, exact), mean_normal(problem.mesh)
+            along_wall = ufl.And(ufl.gt(smooth_wall(mean), SMOOTH_POINT),
                                  ufl.gt(ufl.dot(wall, normal), np.cos(WALL_BODY_ANGLE)))
-            side_a, side_b = (-deformed_normal(problem, n, exact) for n in edge_normals(problem))
+            side_a, side_b = (-deformed_normal(problem, n, exact) for n in edge_normals(mean))
             at_edge = into_arc(normal, side_a, side_b)
             at_edge = ufl.conditional(ufl.gt(ufl.dot(at_edge, normal), np.cos(WALL_BODY_ANGLE)), at_edge, normal)
             normal = ufl.conditional(along_wall, wall, at_edge)

@@ -46,9 +46,15 @@ Hoekstra's uncertainty for oscillatory convergence and anomalous behaviour, U = 
 (J. Mar. Sci. Technol., doi:10.1007/s00773-008-0018-1, appendix 1)."""
 
 
+def spread(values: list[float]) -> float | None:
+    """(largest - smallest) / |finest| of `values` (coarsest first); None where the finest is 0."""
+    return (max(values) - min(values)) / abs(values[-1]) if values[-1] else None
+
+
 def range_error(values: list[float]) -> float | None:
     """The relative uncertainty of the finest of `values` (coarsest first) where they do not
-    converge monotonically: 3 (largest - smallest) / |finest| over the values given. Eca and
-    Hoekstra take the range over every mesh of a study; pass the meshes an estimate stands on
-    (the three finest). None where the finest is 0."""
-    return RANGE_FACTOR * (max(values) - min(values)) / abs(values[-1]) if values[-1] else None
+    converge monotonically: 3 `spread(values)`. Eca and Hoekstra take the range over every mesh
+    of a study; pass the meshes an estimate stands on (the three finest). None where the finest
+    is 0."""
+    relative = spread(values)
+    return None if relative is None else RANGE_FACTOR * relative

@@ -24,23 +24,16 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from femcontact.effects.contact import edge_normals, into_arc, smooth_wall, wall_normal
+from femcontact.effects.contact import edge_normals, into_arc, mean_normal, smooth_wall, wall_normal
 from femcontact.families import load_scene
 from femcontact.solver.stepping import Simulation
 
 SCENES = Path(__file__).parents[2] / "scenes"
 
 
-class Body:
-    """What `smooth_wall` reads of a problem: its mesh and dimension."""
-
-    def __init__(self, mesh):
-        self.mesh, self.dim = mesh, mesh.geometry.dim
-
-
 def edge_nodes(mesh) -> np.ndarray:
     """Coordinates of the owned nodes `smooth_wall` puts on an edge."""
-    smooth = smooth_wall(Body(mesh))
+    smooth = smooth_wall(mean_normal(mesh))
     owned = smooth.function_space.dofmap.index_map.size_local
     x = smooth.function_space.tabulate_dof_coordinates()[:owned]
     return x[smooth.x.array[:owned] == 0.0]
@@ -52,7 +45,7 @@ def test_an_edge_s_normal_cone_spans_its_two_faces():
     45 deg into the hole, and radially in), to within the facets' turn about the axis (1 mm
     contact elements on R = 5.05 mm: up to h / 2R, 0.1 rad)."""
     scene = load_scene(SCENES / "insertion_3d.toml", ["mesh.contact_size=1.0", "mesh.contact_zone=3.0"])
-    upper, lower = edge_normals(Simulation(scene, MPI.COMM_SELF).problem)
+    upper, lower = edge_normals(mean_normal(Simulation(scene, MPI.COMM_SELF).problem.mesh))
     x = upper.function_space.tabulate_dof_coordinates()
     r = np.hypot(x[:, 0], x[:, 1])
     on_edge = np.isclose(r, 5.05, atol=1e-6) & np.isclose(x[:, 2], -1.0, atol=1e-6)
