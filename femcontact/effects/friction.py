@@ -11,9 +11,10 @@ The anchors are a discontinuous field, one value per element node: the pressure 
 the bound mu p differ between the two facets that meet at a node (the Nitsche pressure
 uses each element's own stress), and a facet's anchor must hold that facet's traction for
 the next increment to start exactly where the last one converged. With the contact rules
-that integrate at the nodes (2-D, and 3-D P1) this holds to round-off, except at a node
-shared by two contact facets of one element, where the anchor holds their average; 3-D P2
-adds each facet's centroid, whose anchor is interpolated from the element's nodes. The field
+that integrate at the nodes (2-D, and 3-D P1) this holds to round-off, also at a node shared
+by two contact facets of one element (a hole's mouth edge: `commit` keeps the larger of their
+tractions, which both facets clip back to their own); 3-D P2 adds each facet's centroid,
+whose anchor is interpolated from the element's nodes. The field
 lives on every element (DOLFINx 0.5 has no function space on facets): d numbers per node of
 each element, in 3-D P1 about 24 per mesh vertex. On exact surfaces (`contact.surface`) the
 contact points include the edge midpoints: the anchors are quadratic there, one per node.
@@ -33,6 +34,34 @@ from femcontact.physics.rotation import rotation_numpy
 
 
 STUCK_MU = 1e6  # a friction coefficient under which every touching point sticks (`lock_contacts`)
+
+
+def contact_layers(problem) -> list:
+    """The contact measure split into layers (ds measures with its quadrature rule) such that no
+    element has two facets in one layer: an element's contact facets in the order of their
+    midpoints (x, then y, then z), the first in layer 1, the second in layer 2, ... The order
+    is the geometry's, so every rank assigns a facet alike."""
+    from dolfinx.mesh import compute_midpoints, meshtags
+
+    mesh, model = problem.mesh, problem.model
+    tdim = mesh.topology.dim
+    contact_tags = [model.facets[name] for name in model.contact_facets]
+    facets = np.sort(model.facet_tags.indices[np.isin(model.facet_tags.values, contact_tags)])
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
+    midpoints = compute_midpoints(mesh, tdim - 1, facets)
+    by_cell = {}
+    for facet, midpoint in zip(facets, midpoints):
+        by_cell.setdefault(int(facet_cells.links(facet)[0]), []).append((tuple(midpoint), int(facet)))
+    layer = np.zeros(len(facets), dtype=np.int32)
+    position = {facet: k for k, facet in enumerate(facets)}
+    for entries in by_cell.values():
+        for k, (_, facet) in enumerate(sorted(entries)):
+            layer[position[facet]] = k + 1
+    count = mesh.comm.allreduce(int(layer.max(initial=1)), op=MPI.MAX)
+    tags = meshtags(mesh, tdim - 1, facets.astype(np.int32), layer)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=problem.ds_contact.metadata())
+    return [ds(k) for k in range(1, count + 1)]
 
 
 class Friction(Effect):
@@ -76,8 +105,10 @@ class Friction(Effect):
         # facets in 3-D: a quadratic triangle's vertex functions integrate to zero); its tiny volume
         # term (relative 1e-10 per element size) only makes the matrix regular off the contact facets
         size = problem.model.h_contact
-        self.traction_form, self.area_form, self.projection_form = compile_forms([
-            ufl.dot(tangential, v) * problem.ds_contact, sum(v[k] for k in range(problem.dim)) * problem.ds_contact,
+        layers = contact_layers(problem)
+        self.layer_forms = compile_forms([form for ds in layers for form in (
+            ufl.dot(tangential, v) * ds, sum(v[k] for k in range(problem.dim)) * ds)])
+        self.projection_form, = compile_forms([
             ufl.inner(w, v) * problem.ds_contact + 1e-10 * size * ufl.inner(w, v) * problem.dx])
         self.projection = None
 
@@ -89,23 +120,35 @@ class Friction(Effect):
     def commit(self, dt: float) -> None:
         """Move each anchor so that -gamma_T (xi - anchor) equals the converged tangential
         traction t: anchor = xi + R^T t / gamma_T. t at an element node is its share of the
-        integral of t over the contact facets divided by its share of their area; where some
-        node's share of area vanishes (P2 in 3-D: a quadratic triangle's vertex functions
-        integrate to zero), the L2 projection of t on the anchors' space instead."""
+        integral of t over a contact facet divided by its share of the facet's area; where an
+        element has several contact facets at the node (`contact_layers`), the largest of
+        their tractions: they share the trial traction and differ only where a facet's bound
+        mu p clips it, so the largest is the one trial that each facet clips to its own
+        traction again. Where some node's share of area vanishes (P2 in 3-D: a quadratic
+        triangle's vertex functions integrate to zero), the L2 projection of t on the anchors'
+        space instead."""
         p = self.problem
-        vectors = [summed_vector(form) for form in (self.traction_form, self.area_form)]
-        force_vector, area_vector = vectors
-        with force_vector.localForm() as force_local, area_vector.localForm() as area_local:
-            force = force_local.array.reshape(-1, p.dim).copy()
-            weight = area_local.array.reshape(-1, p.dim)[:, :1].copy()
+        vectors = [summed_vector(form) for form in self.layer_forms]
+        arrays = []
+        for vector in vectors:
+            with vector.localForm() as local:
+                arrays.append(local.array.reshape(-1, p.dim).copy())
+        forces, weights = arrays[0::2], [a[:, :1] for a in arrays[1::2]]
         if self.projection is None:  # decided once: the areas depend only on the mesh
+            weight = sum(weights)
             largest = p.mesh.comm.allreduce(float(np.abs(weight).max(initial=0.0)), op=MPI.MAX)
             degenerate = np.any((weight != 0) & (np.abs(weight) < 1e-9 * largest))
             self.projection = bool(p.mesh.comm.allreduce(degenerate, op=MPI.LOR))
         if self.projection:
+            force_vector = vectors[0].copy()
+            for vector in vectors[2::2]:
+                force_vector.axpy(1.0, vector)
             traction = self._projected_traction(force_vector)
+            force_vector.destroy()
         else:
-            traction = np.where(weight > 0, force / np.where(weight > 0, weight, 1.0), 0.0)
+            tractions = np.array([np.where(w > 0, f / np.where(w > 0, w, 1.0), 0.0) for f, w in zip(forces, weights)])
+            largest = np.argmax(np.linalg.norm(tractions, axis=2), axis=0)
+            traction = tractions[largest, np.arange(tractions.shape[1])]
         for vector in vectors:
             vector.destroy()
         R = rotation_numpy(p.rigid.split(p.rigid.values)[1]) @ p.rigid.Q0

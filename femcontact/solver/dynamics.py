@@ -185,17 +185,22 @@ class DynamicSimulation(Simulation):
         del self.history[snapshot["history"]:]
 
     # -- one increment, no output row ------------------------------------------------------
+    def _begin(self, load) -> dict:
+        """Start an increment from the committed state (returned, to restore on failure)."""
+        state = self.problem.state()
+        if self.held is not None:
+            load.motion = self.held.copy()
+        self.problem.begin_increment(load)
+        self.prescribe(load)
+        return state
+
     def solve(self, load, stabilize: bool = True) -> int:
         """Solve one increment from the committed state (left solved, not committed). With
         inertia a failed Newton iteration raises at once (the caller cuts dt: M/dt^2 makes
         a short increment well-posed); without, the stabilised continuation is tried
         (unless `stabilize` is false)."""
         p = self.problem
-        state = p.state()
-        if self.held is not None:
-            load.motion = self.held.copy()
-        p.begin_increment(load)
-        self.prescribe(load)
+        state = self._begin(load)
         dynamic = self.time_stepping is not None and self.time_stepping.active
         try:
             try:
@@ -209,6 +214,28 @@ class DynamicSimulation(Simulation):
         except BaseException:
             p.restore(state)
             raise
+
+    def settle(self, load, gone) -> int:
+        """Solve a quasi-static load from the committed state by letting the rigid body travel
+        to rest (`pseudo_transient_solve`), given up (BodyGone) once `gone(travel)` (the pose's
+        change, mm and rad) is true. Left solved on the exact equations, not committed; a body
+        that comes to rest only while the stabilisation spring holds it, where the exact
+        equations then fail, is a NewtonFailure: near an equilibrium is not in one."""
+        p = self.problem
+        state = self._begin(load)
+        self.stabilization_force = 0.0
+        exhausted = self.pseudo_transient_exhausted
+        try:
+            iterations = self.pseudo_transient_solve(load, persist=True, gone=gone)
+            if self.stabilization_force > 0:
+                raise NewtonFailure(f"the rigid body came to rest by pseudo-transient continuation only with a "
+                                    f"stabilisation force of {self.stabilization_force:.3g} N", [])
+            return iterations
+        except BaseException:
+            p.restore(state)
+            raise
+        finally:
+            self.pseudo_transient_exhausted = exhausted
 
     def accept(self, load) -> None:
         """Commit the solved increment (friction anchors, corners, velocity, pose)."""

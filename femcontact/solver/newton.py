@@ -55,6 +55,11 @@ class NewtonFailure(RuntimeError):
         self.history = history
 
 
+class BodyGone(NewtonFailure):
+    """The rigid body travelled, without coming to rest, farther than its caller asked to follow
+    it (`Simulation.pseudo_transient_solve`'s `gone`)."""
+
+
 class SchurNewton:
     """Newton solver with the rigid-body unknowns condensed by a Schur complement.
 

@@ -280,7 +280,7 @@ class Simulation:
             self.newton.stabilize(0.0)
         return iterations
 
-    def pseudo_transient_solve(self, load, persist: bool = False) -> int:
+    def pseudo_transient_solve(self, load, persist: bool = False, gone=None) -> int:
         """Pseudo-transient continuation on the rigid body's pose (Kelley and Keyes): the
         stabilisation spring ties the body to a pose near its own at the start of each pseudo
         step, so a body without stiffness in some direction (pivoting on one contact node after
@@ -311,8 +311,10 @@ class Simulation:
         follow the load more closely, only failures in a row count (a failure followed by
         converged pseudo steps is progress). The body's travel when it gives up (its
         pose's change at the last converged pseudo step, mm and rad) is kept by step in
-        `pseudo_travel`: how far the load carried it without finding rest."""
-        from femcontact.solver.newton import NewtonFailure
+        `pseudo_travel`: how far the load carried it without finding rest. `gone(travel)`, if
+        given, ends it (BodyGone) as soon as it returns true for that change: the body has gone
+        farther than any answer the caller wants (a probe's peg that let go)."""
+        from femcontact.solver.newton import BodyGone, NewtonFailure
 
         p, options, iterations, spent = self.problem, self.options, 0, 0
         failures, failed = 0, 0  # failed pseudo steps counted (in a row where `persist`), in all
@@ -353,6 +355,9 @@ class Simulation:
                 braking = (p.rigid.values - tie) @ self.newton.stabilization @ moved <= 0
                 velocity = np.zeros_like(pose) if braking else moved
                 travel = p.rigid.values - pose
+                if gone is not None and gone(travel):
+                    raise BodyGone(f"the rigid body went on by pseudo-transient continuation ({spent} Newton "
+                                   f"iterations; it moved by {np.array2string(travel, precision=4)} (mm, rad))", [])
         finally:
             self.newton.stabilize(0.0)
         self.pseudo_transient_exhausted = load.step

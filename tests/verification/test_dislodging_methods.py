@@ -167,8 +167,9 @@ def test_torque_across_the_peg_axis_is_against_the_wedging_moment():
 def test_3d_probes_stream_to_csv_and_resume(tmp_path):
     """The 3-D wedged cylinder on its coarse mesh (resolution 0.3, 1 rank): a small torque
     across the axis against the wedging moment is held (elastic, both contacts loaded), four
-    times the friction torque mu (N_A + N_B) d / 2 is not; each probe is in probes_3d.csv
-    as soon as it is solved, and a new WedgedPeg3D on the same file answers from it without solving."""
+    times the friction torque mu (N_A + N_B) d / 2 is not, and the peg is seen to go (turned by
+    more than the rise, not a Newton solve that stalled); each probe is in probes_3d.csv as soon
+    as it is solved, and a new WedgedPeg3D on the same file answers from it without solving."""
     from femcontact.families.dislodging.pullout_3d import PROBES_FILE, WedgedPeg3D
 
     scene = load_scene(SCENE.with_name("dislodging_methods_3d.toml"), ["mesh.resolution=0.3"])
@@ -182,7 +183,9 @@ def test_3d_probes_stream_to_csv_and_resume(tmp_path):
 
     with open(probes, newline="") as stream:
         rows = list(csv.DictReader(stream))
-    assert [(r["method"], r["holds"]) for r in rows] == [("twist_across", "True"), ("twist_across", "False")]
+    assert [(r["method"], r["holds"], r["goes"]) for r in rows] == [("twist_across", "True", "False"),
+                                                                     ("twist_across", "False", "True")]
+    assert "went on" in rows[1]["reason"]
     assert float(rows[0]["moved_mm"]) < scene["dislodging"]["rise"] and float(rows[0]["zone_A_N"]) > 0
 
     class Resumed(WedgedPeg3D):

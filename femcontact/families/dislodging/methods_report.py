@@ -128,6 +128,7 @@ def rows_3d(cases, degrees) -> list[dict]:
                   **{k: m[k] for k in ("wedged_N_A", "wedged_N_B", "wedged_T_A", "wedged_T_B", "sum_normal_N", "tilt_deg",
                                        "wedge_time_s")}}
         row = {"method": "pull along the axis", "threshold_force_N": m["threshold_force_N"], "bracket_N": m["bracket_N"],
+               "goes_at": m.get("goes_at_force_N"),
                "degree_of_wedging": m["degree_of_wedging"], "estimate_2d_one_dof_first_slip_N": m["one_dof_first_slip_N"],
                "solves": m["pull_solves"], "time_s": m["pull_time_s"], **common}
         if twin:
@@ -138,7 +139,7 @@ def rows_3d(cases, degrees) -> list[dict]:
         for prefix, method in (("twist", "twist about the axis"), ("across", "twist across the axis")):
             if f"{prefix}_threshold_moment_Nmm" in m:
                 out.append({"method": method, "threshold_moment_Nmm": m[f"{prefix}_threshold_moment_Nmm"],
-                            "bracket_Nmm": m[f"{prefix}_bracket_Nmm"],
+                            "bracket_Nmm": m[f"{prefix}_bracket_Nmm"], "goes_at": m.get(f"{prefix}_goes_at_Nmm"),
                             "over_friction_torque": m[f"{prefix}_over_friction_torque"],
                             "over_wedging_moment": m.get(f"{prefix}_over_wedging_moment", ""),
                             "solves": m[f"{prefix}_solves"], "time_s": m[f"{prefix}_time_s"], **common})
@@ -346,7 +347,8 @@ def write(cases: dict[str, list[tuple]], out: Path) -> None:
         lines += ["", "Every evaluation (a bisection each):", ""] + _table(evaluations, PEAK_COLUMNS)
     if three:
         lines += ["", "## 3-D (quasi-static, 2 ranks)", ""] + _table(three, [c for c in (
-            "method", "mesh.resolution", "threshold_force_N", "threshold_moment_Nmm", "sum_normal_N", "degree_of_wedging",
+            "method", "mesh.resolution", "threshold_force_N", "threshold_moment_Nmm", "goes_at", "sum_normal_N",
+            "degree_of_wedging",
             "estimate_2d_one_dof_first_slip_N", "estimate_2d_twin_degree_N", "threshold_over_2d_twin_estimate",
             "over_friction_torque", "over_wedging_moment") if any(c in r for r in three)])
         errors = errors_3d(three)

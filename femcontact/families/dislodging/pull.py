@@ -80,26 +80,40 @@ def largest_held(holds, high: float, tolerance: float, doublings: int = 0) -> tu
     return low, high, probes
 
 
-def quasi_static_probe(simulation, wedged: dict, solve_at, magnitude: float, held: dict) -> int:
-    """Newton iterations of the quasi-static equilibrium under the load `magnitude`, left solved.
-    `solve_at(m)` sets the load m and solves from the current state (raising NewtonFailure);
-    `held` maps magnitudes already held to their equilibria (`Problem.state`). Solved from the
-    wedged state; where that fails, from the equilibrium of the largest magnitude held below it,
-    through CONTINUATION_LOADS loads up to it. These are the same equations (nothing is committed
-    between probes: friction's anchors are the wedged state's) from a closer start: a Newton
-    solve that fails from afar is no proof that the wedge lets go. Raises the last failure."""
+def quasi_static_probe(simulation, wedged: dict, load_at, magnitude: float, held: dict, gone) -> int:
+    """Newton iterations of the quasi-static equilibrium under the load `magnitude`, left solved
+    (not committed). `load_at(m)` is the load of magnitude m; `held` maps magnitudes already held
+    to their equilibria (`Problem.state`); `gone(travel)` says whether a change of the rigid pose
+    (mm, rad) from the wedged one has let the peg go. In turn, until one converges:
+
+    1. exact Newton from the wedged state;
+    2. exact Newton from the equilibrium of the largest magnitude held below, through
+       CONTINUATION_LOADS loads up to it (friction still anchored at the wedged state);
+    3. the rigid body let travel from the wedged state to rest on the exact equations
+       (`DynamicSimulation.settle`: pseudo-transient continuation, given up once the peg has
+       gone: BodyGone).
+
+    A Newton solve that fails is no proof that the wedge lets go: just above a threshold exact
+    Newton can stall with both contacts loaded and the peg not moved (docs/dislodging_methods.md).
+    Raises NewtonFailure when the last fails."""
     from femcontact.solver.newton import NewtonFailure
 
     simulation.resume(wedged)
     try:
-        return solve_at(magnitude)
+        return simulation.solve(load_at(magnitude), stabilize=False)
     except (NewtonFailure, FloatingPointError):
-        below = [m for m in held if m < magnitude]
-        if not below:
-            raise
-    start = max(below)
-    simulation.problem.restore(held[start])
-    return sum(solve_at(m) for m in np.linspace(start, magnitude, CONTINUATION_LOADS + 1)[1:])
+        pass
+    below = [m for m in held if m < magnitude]
+    if below:
+        start = max(below)
+        simulation.problem.restore(held[start])
+        try:
+            return sum(simulation.solve(load_at(m), stabilize=False)
+                       for m in np.linspace(start, magnitude, CONTINUATION_LOADS + 1)[1:])
+        except (NewtonFailure, FloatingPointError):
+            pass
+    simulation.resume(wedged)
+    return simulation.settle(load_at(magnitude), gone)
 
 # -- impulses ------------------------------------------------------------------------------
 
@@ -350,24 +364,27 @@ class Puller:
 
     def holds(self, force: float) -> bool:
         """Does the wedge hold a vertical pull `force` (N) quasi-statically (no inertia)? Yes when
-        the exact Newton iteration (no stabilisation; `quasi_static_probe`) converges to a state
-        with both contact zones loaded and the peg lifted by less than `rise`, the dynamic pull's
-        event (a compliant fixture lifts a held peg by tens of micrometres before it slides)."""
+        its equilibrium (`quasi_static_probe`) has both contact zones loaded and the peg lifted
+        by less than `rise`, the dynamic pull's event (a compliant fixture lifts a held peg by
+        tens of micrometres before it slides)."""
         from femcontact.solver.newton import NewtonFailure
 
         sim, p = self.simulation, self.simulation.problem
         sim.time_stepping.active = False
         duration = sim.scene["steps"][PULL_STEP]["duration"]
 
-        def solve_at(magnitude):
+        def load_at(magnitude):
             self._set_pull(magnitude, "continuous", 0.0)
             load = sim.schedule.load(PULL_STEP, duration, duration)
             load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
-            return sim.solve(load, stabilize=False)
+            return load
+
+        def gone(travel):
+            return abs(travel[1]) >= self.settings["rise"]
 
         held = self.held_states.setdefault(self._restraint(), {})
         try:
-            quasi_static_probe(sim, self.wedged, solve_at, force, held)
+            quasi_static_probe(sim, self.wedged, load_at, force, held, gone)
         except (NewtonFailure, FloatingPointError):
             return False
         lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])

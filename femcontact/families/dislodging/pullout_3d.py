@@ -29,8 +29,8 @@ def contacts_on_axis(row: dict, axis: np.ndarray, dim: int) -> dict:
     return {"N_A": float(on_A @ n_A), "T_A": float(on_A @ a), "N_B": float(-on_B[0]), "T_B": float(on_B[1])}
 
 
-PROBE_COLUMNS = ["method", "magnitude", "holds", "newton_iterations", "residual_N", "moved_mm", "zone_A_N", "zone_B_N",
-                 "reason", "wall_s"]
+PROBE_COLUMNS = ["method", "magnitude", "holds", "goes", "newton_iterations", "residual_N", "moved_mm", "zone_A_N",
+                 "zone_B_N", "reason", "wall_s"]
 TWISTS_3D = {"continuous": "force (N) along the peg axis, out of the hole",
              "twist": "torque (N*mm) about the peg axis",
              "twist_across": "torque (N*mm) about the axis across the peg (perpendicular to it, in the plane of the "
@@ -61,8 +61,8 @@ class WedgedPeg3D:
         known = []
         if self.probes and self.comm.rank == 0 and self.probes.is_file():
             known = read_csv(self.probes)
-        self.known = {(row["method"], round(float(row["magnitude"]), 6)): row["holds"] == "True"
-                      for row in self.comm.bcast(known, root=0)}
+        self.known = {(row["method"], round(float(row["magnitude"]), 6)): (row["holds"] == "True", row.get("goes") == "True")
+                      for row in self.comm.bcast(known, root=0)}  # -> (holds, goes)
         self.resumed = len(self.known)
 
     def direction(self, method: str) -> np.ndarray:
@@ -70,52 +70,58 @@ class WedgedPeg3D:
         return self.across if method == "twist_across" else self.axis
 
     def probe(self, magnitude: float, method: str) -> dict:
-        """Does the wedge hold `magnitude` of `method` (TWISTS_3D) quasi-statically? Yes when the
-        exact Newton iteration (`quasi_static_probe`: from the wedged state, else on from the
-        largest magnitude held in this process) converges with both contact zones loaded
-        and the peg moved by less than `rise` (mm: along the axis, or the rotation about the
-        load's axis times the peg radius), the dynamic pull's event. Its row (PROBE_COLUMNS)."""
-        from femcontact.solver.newton import NewtonFailure
+        """Does the wedge hold `magnitude` of `method` (TWISTS_3D) quasi-statically? Yes when its
+        equilibrium (`quasi_static_probe`: exact Newton from the wedged state, or on from the
+        largest magnitude held, or the peg let travel to rest) has both contact zones loaded and
+        the peg moved by less than `rise` (mm: along the axis, or the rotation about the load's
+        axis times the peg radius), the dynamic pull's event. Its row (PROBE_COLUMNS)."""
+        from femcontact.solver.newton import BodyGone, NewtonFailure
 
         sim, s = self.simulation, self.settings
         start = time.perf_counter()
         pull = sim.scene["steps"][PULL_STEP]
         r0 = self.wedged["state"]["r"]
+        direction = self.direction(method)
         load = None
 
-        def solve_at(value):
+        def load_at(value):
             nonlocal load
-            vector = list(value * self.direction(method))
+            vector = list(value * direction)
             pull.update(force=vector if method == "continuous" else [], moment=[] if method == "continuous" else vector,
                         amplitude="step", load_point="peg_top")
             sim.schedule = Schedule(sim.scene, sim.problem.rigid, sim.schedule.points)
             load = sim.schedule.load(PULL_STEP, pull["duration"], pull["duration"])
             load.motion = r0.copy()
-            return sim.solve(load, stabilize=False)
+            return load
+
+        def moved(travel) -> float:  # mm along the axis, or the rotation about the load's axis times the radius
+            if method == "continuous":
+                return float(np.dot(travel[:3], self.axis))
+            return float(np.dot(travel[3:], direction)) * self.scene["peg"]["width"] / 2
 
         held = self.held_states.setdefault(method, {})
-        row = {"method": method, "magnitude": float(magnitude), "reason": ""}
+        row = {"method": method, "magnitude": float(magnitude), "reason": "", "holds": False, "goes": False,
+               "moved_mm": "", "zone_A_N": "", "zone_B_N": ""}
         try:
-            row["newton_iterations"] = quasi_static_probe(sim, self.wedged, solve_at, magnitude, held)
+            row["newton_iterations"] = quasi_static_probe(sim, self.wedged, load_at, magnitude, held,
+                                                          lambda travel: abs(moved(travel)) >= s["rise"])
             converged = True
         except NewtonFailure as failure:
             converged = False
             history = failure.history or [float("nan")]
-            row.update(newton_iterations=len(history) - 1, residual_N=history[-1],
+            row.update(newton_iterations=len(history) - 1, residual_N=history[-1], goes=isinstance(failure, BodyGone),
                        reason=str(failure).split(";")[0])
         except (FloatingPointError, RuntimeError) as error:
             converged = False
             row.update(reason=type(error).__name__)
-        zones = sim.zone_forces()  # of the last iterate: the converged state, or the last try
-        row.update(holds=False, moved_mm="", zone_A_N=float(zones[0]), zone_B_N=float(zones[-1]))
         if converged:  # (a failed solve leaves the wedged state)
-            r = sim.problem.rigid.values
-            moved = (float(np.dot(r[:3] - r0[:3], self.axis)) if method == "continuous"
-                     else float(np.dot(r[3:] - r0[3:], self.direction(method))) * self.scene["peg"]["width"] / 2)
             R_u, R_r, _ = sim.newton.current_residual(load)
-            row.update(residual_N=sim.newton.norm(R_u, R_r), moved_mm=moved,
-                       holds=bool(np.all(zones > 0) and abs(moved) < s["rise"]))
-            if row["holds"]:
+            zones = sim.zone_forces()
+            distance = moved(sim.problem.rigid.values - r0)
+            holds = bool(np.all(zones > 0) and abs(distance) < s["rise"])
+            row.update(residual_N=sim.newton.norm(R_u, R_r), moved_mm=distance, zone_A_N=float(zones[0]),
+                       zone_B_N=float(zones[-1]), holds=holds, goes=not holds)
+            if holds:
                 held[magnitude] = sim.problem.state()
         row["wall_s"] = time.perf_counter() - start
         return row
@@ -125,7 +131,7 @@ class WedgedPeg3D:
         key = (method, round(magnitude, 6))
         if key not in self.known:
             row = self.probe(key[1], method)
-            self.known[key] = row["holds"]
+            self.known[key] = row["holds"], row["goes"]
             if self.probes and self.comm.rank == 0:
                 new = not self.probes.is_file()
                 with open(self.probes, "a", newline="") as stream:
@@ -133,14 +139,17 @@ class WedgedPeg3D:
                     if new:
                         writer.writeheader()
                     writer.writerow(row)
-        return self.known[key]
+        return self.known[key][0]
 
     def threshold(self, method: str, high: float) -> dict:
         """Largest magnitude the wedge holds (`largest_held` from the guess `high`, doubled at most
-        4 times) to `tolerance` (N; torques: tolerance x the peg radius)."""
+        4 times) to `tolerance` (N; torques: tolerance x the peg radius), and `goes_at`, the
+        smallest magnitude probed under which the peg was seen to go (None: none was): between
+        the two lie loads whose equilibrium was neither found nor shown not to exist."""
         tolerance = self.settings["tolerance"] * (self.scene["peg"]["width"] / 2 if method != "continuous" else 1.0)
         low, high, solves = largest_held(lambda magnitude: self.holds(magnitude, method), high, tolerance, doublings=4)
-        return {"threshold": low, "bracket": high - low, "solves": solves}
+        gone = [magnitude for (name, magnitude), (_, goes) in self.known.items() if name == method and goes]
+        return {"threshold": low, "bracket": high - low, "solves": solves, "goes_at": min(gone, default=None)}
 
 
 def across_axis(wedging_moment, axis: np.ndarray) -> np.ndarray:
@@ -181,12 +190,14 @@ def run_3d(scene: dict, case_dir: Path, checkpoint: bool, restart) -> dict:
     start_pull = time.perf_counter()
     pull = wedge.threshold("continuous", 2 * metrics["one_dof_first_slip_N"])  # the 2-D pull-out: ~first slip
     metrics.update(threshold_force_N=pull["threshold"], bracket_N=pull["bracket"], pull_solves=pull["solves"],
+                   goes_at_force_N=pull["goes_at"],
                    degree_of_wedging=pull["threshold"] / friction, pull_time_s=time.perf_counter() - start_pull)
     wedging = float(np.linalg.norm(scene["steps"][0]["moment"]))
     for method, prefix in (("twist", "twist"), ("twist_across", "across")):
         start_twist = time.perf_counter()
         twist = wedge.threshold(method, friction * radius)
         metrics.update({f"{prefix}_threshold_moment_Nmm": twist["threshold"], f"{prefix}_bracket_Nmm": twist["bracket"],
+                        f"{prefix}_goes_at_Nmm": twist["goes_at"],
                         f"{prefix}_solves": twist["solves"],
                         f"{prefix}_over_friction_torque": twist["threshold"] / (friction * radius),
                         f"{prefix}_over_wedging_moment": twist["threshold"] / wedging,
