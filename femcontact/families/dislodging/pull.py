@@ -379,7 +379,7 @@ class Puller:
             load.motion = self.wedged["state"]["r"].copy()  # dofs held in an experiment stay where the wedge left them
             return load
 
-        def gone(travel):
+        def gone(travel):  # lifted by the rise or more (travel: the pose's change, mm and rad)
             return abs(travel[1]) >= self.settings["rise"]
 
         held = self.held_states.setdefault(self._restraint(), {})
@@ -387,8 +387,7 @@ class Puller:
             quasi_static_probe(sim, self.wedged, load_at, force, held, gone)
         except (NewtonFailure, FloatingPointError):
             return False
-        lift = float(p.rigid.values[1] - self.wedged["state"]["r"][1])
-        if np.all(sim.zone_forces() > 0) and abs(lift) < self.settings["rise"]:
+        if np.all(sim.zone_forces() > 0) and not gone(p.rigid.values - self.wedged["state"]["r"]):
             held[force] = p.state()
             return True
         return False
