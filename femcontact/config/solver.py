@@ -44,6 +44,10 @@ class SolverOptions:
     pseudo_failures times without a converged step)."""
     pseudo_iterations: int = 1500
     """Newton iterations (failed ones included) after which pseudo-transient continuation gives up."""
+    pseudo_reach: float = 64.0
+    """Contact element sizes (rotations by the body's size) a rigid body may travel by
+    pseudo-transient continuation in an increment that can still be cut; farther, the cut follows
+    the load more closely and costs less (dimensionless)."""
     pseudo_softening: float = 4.0
     """Factor by which a converged pseudo step softens the stabilisation spring (a failed one stiffens it)."""
     pseudo_momentum: float = 0.99

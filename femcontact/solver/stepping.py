@@ -3,8 +3,8 @@
 An increment whose Newton iteration does not converge (`NewtonFailure`: too many
 iterations, a non-finite residual or a failed linear solve) is retried from the last
 converged state, first with the contact stabilisation's continuation, then by
-pseudo-transient continuation (a rigid body that must travel to the contact that holds it),
-then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. The last
+pseudo-transient continuation (a rigid body that must travel a few contact elements to the
+contact that holds it), then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. The last
 cut gets one more try (`increment(load, last_try=True)`). A run that still fails raises
 `SimulationFailed` naming the step, the time and the residual history. Any other
 exception is a fault, not non-convergence: it ends the run at once.
@@ -168,8 +168,8 @@ class Simulation:
 
     def increment(self, load, last_try: bool = False) -> dict:
         """Solve one increment from the last converged state (restored on any failure): the
-        plain Newton solve, then the stabilised and the pseudo-transient continuation (once per
-        step); or (`last_try`, an increment that failed at every cut) pseudo-transient
+        plain Newton solve, then the stabilised and the pseudo-transient continuation (given up
+        past `beyond_reach`; once it gave up, not again in the step); or (`last_try`, an increment that failed at every cut) pseudo-transient
         continuation from here, then every contact stuck first (`locked_first_solve`). Returns
         its output row, computed before the history moves on."""
         from femcontact.solver.newton import NewtonFailure
@@ -187,7 +187,7 @@ class Simulation:
             else:
                 ways = [self.plain_solve, self.stabilized_solve]
                 if self.pseudo_transient_exhausted != load.step:
-                    ways.append(self.pseudo_transient_solve)
+                    ways.append(functools.partial(self.pseudo_transient_solve, gone=self.beyond_reach))
             for k, way in enumerate(ways):
                 try:
                     iterations = way(load)
@@ -208,6 +208,16 @@ class Simulation:
         p.commit(load.dt)
         self.last_change = (load.step, load.dt, p.u.x.array - state["u"])
         return row
+
+    def beyond_reach(self, travel) -> bool:
+        """Whether a pose change `travel` (mm, rad) carries the rigid body farther than
+        `pseudo_reach` contact element sizes (a rotation by its arm, as the trust region measures
+        a step): where pseudo-transient continuation carries it that far in an increment that
+        can still be cut, it slides along the load instead of settling near where the increment
+        began, and the cut increment follows the load (measured in docs/stability.md, "The
+        reach of pseudo-transient continuation")."""
+        p = self.problem
+        return bool(np.abs(travel * p.rigid_arms).max() > self.options.pseudo_reach * p.contact_size)
 
     def _predict(self, load) -> None:
         """Where no rigid dof is free (the rigid body's motion is all prescribed), start from the
@@ -312,8 +322,9 @@ class Simulation:
         converged pseudo steps is progress). The body's travel when it gives up (its
         pose's change at the last converged pseudo step, mm and rad) is kept by step in
         `pseudo_travel`: how far the load carried it without finding rest. `gone(travel)`, if
-        given, ends it (BodyGone) as soon as it returns true for that change: the body has gone
-        farther than any answer the caller wants (a probe's peg that let go)."""
+        given, ends it (BodyGone, also for the rest of the step) as soon as it returns true for
+        that change: the body has gone farther than any answer the caller wants (a probe's peg
+        that let go, or `beyond_reach` where the increment can still be cut)."""
         from femcontact.solver.newton import BodyGone, NewtonFailure
 
         p, options, iterations, spent = self.problem, self.options, 0, 0
@@ -356,6 +367,7 @@ class Simulation:
                 velocity = np.zeros_like(pose) if braking else moved
                 travel = p.rigid.values - pose
                 if gone is not None and gone(travel):
+                    self.pseudo_transient_exhausted = load.step
                     raise BodyGone(f"the rigid body went on by pseudo-transient continuation ({spent} Newton "
                                    f"iterations; it moved by {np.array2string(travel, precision=4)} (mm, rad))", [])
         finally:

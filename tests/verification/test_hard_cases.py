@@ -132,3 +132,49 @@ def test_a_push_turns_the_peg_upright_from_far(case):
     assert row["contact_A_Fx"] == pytest.approx(push[0], abs=1e-5)
     assert row["contact_A_Fy"] == pytest.approx(push[1], abs=1e-5)
     assert abs(row["contact_A_Fy"]) < -row["contact_A_Fx"] * scene["contact"]["mu"]
+
+
+# A push of 334.7 N down and to the left on a peg with little friction (mu 0.0196): the stability
+# sweep's d7b784a815f1 at its own mesh (at resolutions 0.5 and 0.7 the push finds no equilibrium
+# at t = 0.0047 s, with or without the reach). Its first increment at full length fails plain
+# Newton and the stabilisation's continuation; pseudo-transient continuation, which takes the
+# whole increment's load at once, then carried the peg 16 mm down the hole in 1,500 Newton
+# iterations (43 s) before it gave up, where half the increment converges in 7. So in an
+# increment that can still be cut, the continuation gives up as soon as the peg has gone
+# `pseudo_reach` contact element sizes (`Simulation.beyond_reach`), and the cut follows the load.
+SLIDING_PUSH = ["contact.mu=0.01959", "hole.width=40.04197", "peg.insertion_depth=8.883",
+                "materials.hole.nu=0.4472", "steps.0.force=[-334.7,-96.68]", "mesh.resolution=1.106"]
+
+
+def test_pseudo_transient_continuation_gives_up_past_its_reach_where_a_cut_is_left():
+    from femcontact.solver.newton import BodyGone, NewtonFailure
+
+    scene = load_scene(SCENE, SLIDING_PUSH)
+    simulation = Simulation(scene, MPI.COMM_WORLD)
+    p = simulation.problem
+    step = scene["steps"][0]
+    load = simulation.schedule.load(0, step["duration"] / step["increments"], step["duration"] / step["increments"])
+    start = p.state()
+    p.begin_increment(load)
+    for way in (simulation.plain_solve, simulation.stabilized_solve):
+        with pytest.raises(NewtonFailure):
+            way(load)
+        p.restore(start)
+        simulation.prescribe(load)
+    pose = p.rigid.values.copy()
+    with pytest.raises(BodyGone):
+        simulation.pseudo_transient_solve(load, gone=simulation.beyond_reach)
+    reach = simulation.options.pseudo_reach * p.contact_size
+    travel = np.abs((p.rigid.values - pose) * p.rigid_arms).max()
+    assert reach < travel < 2 * reach  # given up at the first pseudo step past the reach
+    assert simulation.pseudo_transient_exhausted == 0  # and not tried again in the step
+    p.restore(start)
+    simulation.pseudo_transient_exhausted = None
+
+    simulation.run_step(0, step)  # raises SimulationFailed where an increment does not converge
+    first, loaded = simulation.history[0], simulation.history[-1]
+    assert first["dt"] == pytest.approx(load.dt / 2)  # the cut, not the continuation, took the first increment
+    assert loaded["stabilization_force"] == 0.0
+    # the two walls carry the push (solver tolerance 1e-6 N): the peg is held, not gone
+    assert loaded["contact_A_Fx"] + loaded["contact_B_Fx"] == pytest.approx(-334.7, abs=1e-5)
+    assert loaded["contact_A_Fy"] + loaded["contact_B_Fy"] == pytest.approx(-96.68, abs=1e-5)
