@@ -184,6 +184,11 @@ class Problem:
         into a force: 1 for a translation, `body_size` for a rotation."""
         return np.where(np.arange(len(self.rigid.names)) < self.dim, 1.0, self.body_size)
 
+    def rigid_length(self, change) -> float:
+        """The largest displacement (mm) a change of the rigid dofs (mm, rad) makes: a rotation
+        by its arm (`rigid_arms`)."""
+        return float(np.abs(np.asarray(change) * self.rigid_arms).max())
+
     @property
     def contact_size(self) -> float:
         """The element size in the contact zones (mm)."""

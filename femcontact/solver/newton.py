@@ -380,8 +380,7 @@ class SchurNewton:
     def _at_cap(self, dr) -> bool:
         """Whether the rigid step is as long as `_rigid_step` allows (one contact element size)."""
         p = self.problem
-        length = np.abs(dr * p.rigid_arms).max()
-        return bool(length >= (1 - 1e-9) * p.contact_size)
+        return bool(p.rigid_length(dr) >= (1 - 1e-9) * p.contact_size)
 
     def line_search(self, load, du, dr, residual):
         """Step along (du, dr); returns the residual (R_u, R_r, scale) where it stops.

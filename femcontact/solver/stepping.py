@@ -211,13 +211,13 @@ class Simulation:
 
     def beyond_reach(self, travel) -> bool:
         """Whether a pose change `travel` (mm, rad) carries the rigid body farther than
-        `pseudo_reach` contact element sizes (a rotation by its arm, as the trust region measures
-        a step): where pseudo-transient continuation carries it that far in an increment that
+        `pseudo_reach` contact element sizes (`Problem.rigid_length`, as the trust region
+        measures a step): where pseudo-transient continuation carries it that far in an increment that
         can still be cut, it slides along the load instead of settling near where the increment
         began, and the cut increment follows the load (measured in docs/stability.md, "The
         reach of pseudo-transient continuation")."""
         p = self.problem
-        return bool(np.abs(travel * p.rigid_arms).max() > self.options.pseudo_reach * p.contact_size)
+        return bool(p.rigid_length(travel) > self.options.pseudo_reach * p.contact_size)
 
     def _predict(self, load) -> None:
         """Where no rigid dof is free (the rigid body's motion is all prescribed), start from the
