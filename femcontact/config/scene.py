@@ -217,7 +217,8 @@ SUPPORT = {
 }
 
 SOLVER = {
-    "max_iterations": Field("int", 40, "Newton iterations per solve. An increment whose plain solve fails is "
+    "max_iterations": Field("int", 40, "Newton iterations per solve (one whose |R| has stopped moving stops "
+                            "sooner: docs/stability.md, 'A Newton solve that stalls'). An increment whose plain solve fails is "
                             "solved again along the contact stabilisation's continuation, up to one solve per "
                             "stabilisation level, each within this limit: history.csv's newton_iterations is the "
                             "sum over the solves that led to the converged increment, so it can exceed this value",

@@ -38,6 +38,12 @@ class SolverOptions:
     stiffness as a fraction of E * h_contact); the last, 0, solves the exact equations."""
     stabilization_tolerance: float = 1e-3
     """Largest stabilisation force kept, relative to the peak load on the rigid body (dimensionless)."""
+    stall_iterations: int = 3
+    """Newton iterations in a row after which a solve whose |R| barely moves (`stall_change`) stops
+    (`NewtonFailure`) instead of running on to `max_iterations`."""
+    stall_change: float = 1e-4
+    """Change of |R| per iteration, relative to |R|, below which an iteration counts as stalled
+    (dimensionless)."""
     pseudo_failures: int = 6
     """Failed pseudo steps after which pseudo-transient continuation gives up; in the last try of
     an increment, failed pseudo steps in a row (the spring stiffened pseudo_softening **

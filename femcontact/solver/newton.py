@@ -22,8 +22,9 @@ physical scales it needs (a stiffness modulus, the contact's stiffness and eleme
 rigid body's size) from `Problem` methods. A line search (see `SchurNewton.line_search`) damps
 the semismooth Newton where stick/slip or contact sets change; before it, where the options
 ask for `curved_step`, a rejected full step is retried along a curved path that follows the
-residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN or too many iterations raise
-`NewtonFailure`, which the stepper answers by cutting the increment.
+residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN, a residual that has
+stopped moving (`SchurNewton._stalled`) or too many iterations raise `NewtonFailure`, which the
+stepper answers by cutting the increment.
 """
 import numpy as np
 from dolfinx import la
@@ -235,6 +236,9 @@ class SchurNewton:
                 raise NewtonFailure("residual is not finite", history)
             if self.force_norm(R_u, R_r) <= self.tolerance(scale):
                 return iteration
+            if self._stalled(history):
+                raise NewtonFailure(f"no progress: |R| changed by less than {options.stall_change:g} of itself "
+                                    f"in {options.stall_iterations} iterations in a row", history)
             if iteration == options.max_iterations:
                 break
             du, dr = self.direction(load, R_u, R_r)
@@ -250,6 +254,16 @@ class SchurNewton:
                 capped = None
             residual = self.line_search(load, du, dr, (R_u, R_r, scale))
         raise NewtonFailure(f"no convergence in {options.max_iterations} iterations", history)
+
+    def _stalled(self, history) -> bool:
+        """Whether |R| moved by less than `stall_change` of itself in each of the last
+        `stall_iterations` iterations: the line search keeps finding no descent (Newton cycling
+        between contact states, or creeping along a kink), and the iterations left to
+        `max_iterations` would not converge either (measured in docs/stability.md, "A Newton
+        solve that stalls")."""
+        n, change = self.options.stall_iterations, self.options.stall_change
+        last = history[-n - 1:]
+        return len(last) == n + 1 and all(abs(b - a) <= change * a for a, b in zip(last, last[1:]))
 
     def direction(self, load, R_u, R_r):
         """Newton direction (du Vec, dr array) from the Schur complement."""

@@ -178,3 +178,38 @@ def test_pseudo_transient_continuation_gives_up_past_its_reach_where_a_cut_is_le
     # the two walls carry the push (solver tolerance 1e-6 N): the peg is held, not gone
     assert loaded["contact_A_Fx"] + loaded["contact_B_Fx"] == pytest.approx(-334.7, abs=1e-5)
     assert loaded["contact_A_Fy"] + loaded["contact_B_Fy"] == pytest.approx(-96.68, abs=1e-5)
+
+
+# seed 1's 951fab131e93 at a coarse mesh: a push the rigid peg cannot hold (mu 0.057, the
+# two-point statics need 0.23); plain Newton's |R| stalls at 2.76e-2 N
+STALLING_PUSH = ["contact.mu=0.05699", "hole.width=40.001177", "peg.insertion_depth=9.25",
+                 "materials.hole.nu=0.4731", "steps.0.force=[-0.3546,-0.1544]", "mesh.resolution=0.35"]
+
+
+def test_a_newton_solve_that_stalls_stops_early_and_loses_nothing():
+    import dataclasses
+
+    from femcontact.solver.newton import NewtonFailure
+
+    scene = load_scene(SCENE, STALLING_PUSH)
+    simulation = Simulation(scene, MPI.COMM_WORLD)
+    p, options = simulation.problem, simulation.options
+    step = scene["steps"][0]
+    load = simulation.schedule.load(0, step["duration"] / step["increments"], step["duration"] / step["increments"])
+    start = p.state()
+    p.begin_increment(load)
+    histories = []
+    for stall_iterations in (options.stall_iterations, options.max_iterations + 1):  # the stop, then none
+        simulation.options = simulation.newton.options = dataclasses.replace(options, stall_iterations=stall_iterations)
+        p.restore(start)
+        simulation.prescribe(load)
+        with pytest.raises(NewtonFailure) as failure:
+            simulation.plain_solve(load)
+        histories.append((str(failure.value), failure.value.history))
+    (reason, stopped), (_, full) = histories
+    assert reason.startswith("no progress") and len(stopped) < options.max_iterations // 2
+    last = stopped[-options.stall_iterations - 1:]
+    assert all(abs(b - a) <= options.stall_change * a for a, b in zip(last, last[1:]))
+    assert len(full) == options.max_iterations + 1  # without the stop: every iteration, no convergence
+    assert full[: len(stopped)] == stopped  # the same iterations up to the stop
+    assert min(full) > (1 - 1e-3) * stopped[-1]  # the iterations the stop saves lower |R| by < 0.1 %
