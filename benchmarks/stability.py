@@ -116,11 +116,9 @@ def check(result: dict | None) -> str | None:
 
 def friction_needed(scene: dict) -> float | None:
     """The least mu for which a rigid peg in the scene's two-point contact holds the first step's
-    load (`references.two_point_statics`); None where that model does not apply (3-D, no
-    two-point placement, a load point the placement does not name)."""
-    step = scene["steps"][0]
-    force, couple = step["force"] or [0.0, 0.0], (step["moment"] or [0.0])[0]
-    return two_point_statics.placement_friction_needed(scene, force, couple, step["load_point"])
+    load (`references.two_point_statics`); None where that model does not apply (no two-point
+    placement, a load point the placement does not name, a 3-D load out of the plane of the lean)."""
+    return two_point_statics.step_friction_needed(scene, scene["steps"][0])
 
 
 def equilibrium_summary(results: dict, needed: dict) -> list[str]:

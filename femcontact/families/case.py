@@ -46,20 +46,22 @@ def statics_verdict(simulation, index: int, load) -> dict | None:
     """Whether `load` in step `index` has no static equilibrium: {'load', 'step', 'time',
     'friction_needed', 'mu'} or None (it has one, or the statics do not apply).
 
-    The statics apply to a 2-D rigid peg placed in two-point contact, held by nothing but the
-    hole (no compliant support), with no preload left by earlier steps: then a load that needs
+    The statics apply to a rigid peg placed in two-point contact (in 3-D, under a load in the
+    plane of its lean: `two_point_statics.section_load`), held by nothing but the hole (no
+    compliant support), with no preload left by earlier steps: then a load that needs
     more friction than mu in the configuration the peg reaches (`two_point_statics.
     reached_friction_needed`: the two-point contact if the load presses the tip corner, else
     upright against the mouth corner's wall or the opposite lean) has no equilibrium (the peg
     slides or rocks between the leans); 'friction_needed' is None where no friction holds it."""
     from femcontact.references.peg_in_hole import l_2p
-    from femcontact.references.two_point_statics import reached_friction_needed
+    from femcontact.references.two_point_statics import reached_friction_needed, section_load
 
     scene = simulation.scene
-    if not _free_peg_in_hole(scene) or scene["dim"] != 2 or scene["peg"]["placement"] != "two_point":
+    in_plane = section_load(scene["dim"], load.force, load.moment)
+    if not _free_peg_in_hole(scene) or scene["peg"]["placement"] != "two_point" or in_plane is None:
         return None
     step = scene["steps"][index]
-    force, couple = [float(f) for f in load.force], float(load.moment[0])
+    force, couple = in_plane
     size = math.hypot(*force) + abs(couple) / l_2p(scene["peg"]["width"], scene["peg"]["insertion_depth"])
     earlier = [row for row in simulation.history if row["step"] != step["name"]]
     if not size > 0 or (earlier and max(earlier[-1]["contact_A_force"], earlier[-1]["contact_B_force"])
@@ -159,9 +161,11 @@ class RunOn:
         """The peg's speed over the increment (mm/s): its reference point's plus its rotation's at half its width."""
         if self.previous is None:
             return 0.0
-        moved = math.hypot(row["rigid_x"] - self.previous["rigid_x"], row["rigid_y"] - self.previous["rigid_y"])
-        turned = abs(row["rigid_rz"] - self.previous["rigid_rz"]) * self.simulation.scene["peg"]["width"] / 2
-        return (moved + turned) / row["dt"]
+
+        def change(names) -> float:
+            return math.hypot(*(row[name] - self.previous[name] for name in names if name in row))
+        moved, turned = change(("rigid_x", "rigid_y", "rigid_z")), change(("rigid_rx", "rigid_ry", "rigid_rz"))
+        return (moved + turned * self.simulation.scene["peg"]["width"] / 2) / row["dt"]
 
 
 def outcome_metrics(simulation, verdict: dict) -> dict:

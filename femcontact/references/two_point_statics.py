@@ -1,5 +1,5 @@
-"""Statics of a rigid peg in two-point contact (2-D): does a load have a static equilibrium,
-and how much friction does it need?
+"""Statics of a rigid peg in two-point contact (2-D, or a 3-D peg under a load in the plane of
+its lean): does a load have a static equilibrium, and how much friction does it need?
 
 The contacts can push on the peg along their normals n (N >= 0, N) and rub along their
 tangents t with |T| <= mu N (Coulomb). A load, a force F (N) at a point p (mm) plus a couple
@@ -11,7 +11,9 @@ peg's preload (which can hold loads beyond this limit).
 
 For the peg-in-hole placement of the thesis, ch. 3 (geometry.placement, 'two_point'), contact A
 is the hole's mouth corner on the peg's side, pushing along the peg's inward side normal,
-and contact B the peg's tip corner on the opposite wall, pushed back along -x.
+and contact B the peg's tip corner on the opposite wall, pushed back along -x. A 3-D peg leans
+in the x-z plane: its section there is the 2-D placement (x, z as x, y), and a load in that
+plane (Fx, Fz and the couple My) is the 2-D load (Fx, Fz) with the couple -My (`section_load`).
 
 The peg starts with unloaded contacts, so the placement holds a load only if the load presses
 contact B: a load that turns the peg about A away from B opens B (holding it would need a
@@ -110,8 +112,9 @@ def reached_friction_needed(scene: dict, force, couple: float, load_point: str) 
 
 def placement_friction_needed(scene: dict, force, couple: float, load_point: str) -> float | None:
     """The least mu with which a rigid peg at the scene's two-point placement holds `force` (N) at
-    its named point `load_point` and `couple` (N*mm); None where this model does not apply (not
-    2-D, no two-point placement, a load point the placement does not name)."""
+    its named point `load_point` and `couple` (N*mm), both in the plane of its lean
+    (`section_load`); None where this model does not apply (no two-point placement, a load point
+    the placement does not name)."""
     placed = _placement(scene, load_point)
     if placed is None:
         return None
@@ -119,14 +122,41 @@ def placement_friction_needed(scene: dict, force, couple: float, load_point: str
     return friction_needed(peg_in_hole_contacts(pose), force, at, couple)
 
 
-def _placement(scene: dict, load_point: str):
-    """(the peg's two-point pose, the position (mm) of `load_point` on it), or None where the
-    statics do not apply (not 2-D, no two-point placement, a point the placement does not name)."""
-    from geometry.placement import peg_pose
+def section_load(dim: int, force, moment) -> tuple[list, float] | None:
+    """The load (`force` N, `moment` N*mm as a scene's step gives them) in the plane of the peg's
+    lean: 2-D as it is, (force, couple); 3-D ((Fx, Fz), -My), the couple counter-clockwise in
+    (x, z), or None where the load leaves that plane (Fy, Mx or Mz above 1e-9 of its size)."""
+    force, moment = [float(f) for f in force], [float(m) for m in moment]
+    if dim == 2:
+        return force or [0.0, 0.0], moment[0] if moment else 0.0
+    force, moment = force or [0.0] * 3, moment or [0.0] * 3
+    size = max(np.abs(force).max(), np.abs(moment).max())
+    if max(abs(force[1]), abs(moment[0]), abs(moment[2])) > 1e-9 * size:
+        return None
+    return [force[0], force[2]], -moment[1]
 
-    if scene.get("dim") != 2 or scene.get("peg", {}).get("placement") != "two_point":
+
+def step_friction_needed(scene: dict, step: dict) -> float | None:
+    """The least mu with which a rigid peg at the scene's two-point placement holds the whole load
+    of `step` (a scene's step: its force at its load point and its couple); None where this model
+    does not apply (`placement_friction_needed`, or a 3-D load out of the plane of the lean)."""
+    load = section_load(scene["dim"], step["force"], step["moment"])
+    return None if load is None else placement_friction_needed(scene, *load, step["load_point"])
+
+
+def _placement(scene: dict, load_point: str):
+    """(the peg's two-point pose, in 3-D its section in the x-z plane; the position (mm) of
+    `load_point` on it), or None where the statics do not apply (no two-point placement, a point
+    the placement does not name)."""
+    from geometry.placement import Pose, peg_pose
+
+    if scene.get("peg", {}).get("placement") != "two_point":
         return None
     pose = peg_pose(scene)
+    if scene["dim"] == 3:
+        plane = [0, 2]
+        pose = Pose(origin=pose.origin[plane], rotation=pose.rotation[np.ix_(plane, plane)], tilt=pose.tilt,
+                    points={name: point[plane] for name, point in pose.points.items()})
     return (pose, pose.points[load_point]) if load_point in pose.points else None
 
 

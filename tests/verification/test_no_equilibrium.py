@@ -155,3 +155,28 @@ def test_with_inertia_a_push_without_equilibrium_lifts_the_peg_to_where_it_comes
     rested = load_scene(SCENE, [*COARSE, f"peg.insertion_depth={5.0 - rise}"])
     assert two_point_statics.placement_friction_needed(rested, [-5.0, 1.0], 0.0, "peg_top") < 0.06
     assert "with inertia it ran on: the peg came to rest at t = " in result["reason"]
+
+
+@pytest.mark.parametrize("mu, status", [(0.005, "no_equilibrium"), (0.02, "failed")])
+def test_a_3d_couple_in_the_plane_of_the_lean_is_decided_by_the_statics_of_its_section(tmp_path, monkeypatch,
+                                                                                         mu, status):
+    """The 3-D wedging scene's couple needs mu >= tan(t / 2) = 0.011 (test_two_point_statics.py);
+    with Newton made to fail, below it the run ends without equilibrium, above it stays a failure."""
+    from femcontact.families.case import run_contact
+    from femcontact.solver import newton
+    from femcontact.solver.stepping import SimulationFailed
+
+    def stalled(self, load, stiff_start=False):
+        raise newton.NewtonFailure("no convergence in 40 iterations", [1.0, 0.99])
+
+    monkeypatch.setattr(newton.SchurNewton, "solve", stalled)
+    scene = load_scene(ROOT / "scenes" / "wedging_3d.toml", ["mesh.resolution=0.3", f"contact.mu={mu}",
+                                                             "solver.max_cuts=0"])
+    if status == "failed":
+        with pytest.raises(SimulationFailed):
+            run_contact(scene, tmp_path)
+        return
+    result = run_contact(scene, tmp_path)
+    assert result["status"] == status and result["metrics"]["increments"] == 0
+    assert result["metrics"]["friction_needed"] == pytest.approx(0.010963, rel=1e-3)
+    assert "in two-point contact: it needs mu >= 0.01096, the scene has mu = 0.005" in result["reason"]

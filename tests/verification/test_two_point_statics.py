@@ -99,3 +99,19 @@ def test_a_load_that_opens_both_leans_is_held_nowhere():
     contacts = statics.peg_in_hole_contacts(placed)
     assert not statics.presses_tip(contacts, force, placed.points["peg_top"], 0.0)
     assert statics.presses_tip(contacts, [-5.0, 1.0], placed.points["peg_top"], 0.0)
+
+
+def test_a_3d_peg_under_a_couple_in_the_plane_of_its_lean_has_the_statics_of_its_section():
+    """The 3-D wedging scene's couple My = -1000 N mm leans the peg further (the 2-D couple +1000,
+    `section_load`). Contact A's normal (the peg's side) is tilted by the lean t, B's (the wall)
+    is not, so the couple leaves a vertical force N sin t that friction must carry at both:
+    mu >= tan(t / 2). A couple about another axis leaves the plane: the model does not apply."""
+    scene = load_scene(SCENE.parent / "wedging_3d.toml", ["mesh.resolution=0.3"])
+    tilt = peg_pose(scene).tilt
+    step = scene["steps"][0]
+    assert statics.section_load(3, [0.0, 0.0, 0.0], step["moment"]) == ([0.0, 0.0], 1000.0)
+    assert statics.step_friction_needed(scene, step) == pytest.approx(math.tan(tilt / 2), rel=1e-5)
+    section = load_scene(SCENE, ["peg.width=40", "hole.width=40.1", "peg.insertion_depth=5", "steps.0.force=[]",
+                                 "steps.0.moment=[1000]"])
+    assert statics.step_friction_needed(section, section["steps"][0]) == statics.step_friction_needed(scene, step)
+    assert statics.step_friction_needed(scene, {**step, "moment": [10.0, -1000.0, 0.0]}) is None

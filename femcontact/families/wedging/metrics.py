@@ -47,7 +47,7 @@ import math
 import numpy as np
 
 from femcontact.references import peg_in_hole as analytic
-from femcontact.references.two_point_statics import placement_friction_needed
+from femcontact.references.two_point_statics import step_friction_needed
 from femcontact.config.scene import friction_coefficient
 
 FORCE_FLOOR = 0.02        # residual force / load scale below which the peg is free
@@ -110,9 +110,7 @@ def push_friction_needed(scene: dict) -> float | None:
     """The least mu with which a rigid peg at the two-point placement holds the first step's load
     (`references.two_point_statics`); None for a load point the placement does not name (the
     peg's reference point) or a scene without a two-point placement."""
-    step = scene["steps"][0]
-    return placement_friction_needed(scene, step["force"] or [0.0, 0.0], (step["moment"] or [0.0])[0],
-                                     step["load_point"])
+    return step_friction_needed(scene, scene["steps"][0])
 
 
 def load_scale(scene: dict, history: list[dict]) -> float:
