@@ -49,6 +49,15 @@ def test_a_frictionless_peg_pushed_sideways_ends_without_equilibrium_and_not_wed
 def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, status):
     """Newton made to fail at every increment: below the friction the push needs (0.067) the
     run ends without equilibrium, above it the failure is the solver's and stays a failure."""
+    scene = load_scene(SCENE, [*COARSE, f"contact.mu={mu}", "solver.max_cuts=0"])
+    result = run_with_newton_failing(scene, tmp_path, monkeypatch, status)
+    if result:
+        assert result["metrics"]["friction_needed"] == pytest.approx(needed(scene), rel=1e-5)
+
+
+def run_with_newton_failing(scene: dict, tmp_path, monkeypatch, status: str) -> dict | None:
+    """Run `scene` with every Newton solve failing: expect SimulationFailed (status 'failed', then
+    None) or a result of `status` with no increment converged."""
     from femcontact.families.case import run_contact
     from femcontact.solver import newton
     from femcontact.solver.stepping import SimulationFailed
@@ -57,14 +66,13 @@ def test_the_statics_not_the_stalled_residual_decide(tmp_path, monkeypatch, mu, 
         raise newton.NewtonFailure("no convergence in 40 iterations", [1.0, 0.99])
 
     monkeypatch.setattr(newton.SchurNewton, "solve", stalled)
-    scene = load_scene(SCENE, [*COARSE, f"contact.mu={mu}", "solver.max_cuts=0"])
     if status == "failed":
         with pytest.raises(SimulationFailed):
             run_contact(scene, tmp_path)
-        return
+        return None
     result = run_contact(scene, tmp_path)
     assert result["status"] == status and result["metrics"]["increments"] == 0
-    assert result["metrics"]["friction_needed"] == pytest.approx(needed(scene), rel=1e-5)
+    return result
 
 
 INERTIA = [*COARSE, "contact.mu=0", "effects=['friction', 'plane_strain', 'inertia']"]
@@ -162,21 +170,9 @@ def test_a_3d_couple_in_the_plane_of_the_lean_is_decided_by_the_statics_of_its_s
                                                                                          mu, status):
     """The 3-D wedging scene's couple needs mu >= tan(t / 2) = 0.011 (test_two_point_statics.py);
     with Newton made to fail, below it the run ends without equilibrium, above it stays a failure."""
-    from femcontact.families.case import run_contact
-    from femcontact.solver import newton
-    from femcontact.solver.stepping import SimulationFailed
-
-    def stalled(self, load, stiff_start=False):
-        raise newton.NewtonFailure("no convergence in 40 iterations", [1.0, 0.99])
-
-    monkeypatch.setattr(newton.SchurNewton, "solve", stalled)
     scene = load_scene(ROOT / "scenes" / "wedging_3d.toml", ["mesh.resolution=0.3", f"contact.mu={mu}",
                                                              "solver.max_cuts=0"])
-    if status == "failed":
-        with pytest.raises(SimulationFailed):
-            run_contact(scene, tmp_path)
-        return
-    result = run_contact(scene, tmp_path)
-    assert result["status"] == status and result["metrics"]["increments"] == 0
-    assert result["metrics"]["friction_needed"] == pytest.approx(0.010963, rel=1e-3)
-    assert "in two-point contact: it needs mu >= 0.01096, the scene has mu = 0.005" in result["reason"]
+    result = run_with_newton_failing(scene, tmp_path, monkeypatch, status)
+    if result:
+        assert result["metrics"]["friction_needed"] == pytest.approx(0.010963, rel=1e-3)
+        assert "in two-point contact: it needs mu >= 0.01096, the scene has mu = 0.005" in result["reason"]
