@@ -218,10 +218,11 @@ SUPPORT = {
 
 SOLVER = {
     "max_iterations": Field("int", 40, "Newton iterations per solve (one whose |R| has stopped moving stops "
-                            "sooner: docs/stability.md, 'A Newton solve that stalls'). An increment whose plain solve fails is "
-                            "solved again along the contact stabilisation's continuation, up to one solve per "
-                            "stabilisation level, each within this limit: history.csv's newton_iterations is the "
-                            "sum over the solves that led to the converged increment, so it can exceed this value",
+                            "sooner: docs/stability.md, 'A Newton solve that stalls'). An increment whose plain "
+                            "solve fails is solved again along the contact stabilisation's continuation, up to one "
+                            "solve per stabilisation level, each within this limit: history.csv's newton_iterations "
+                            "is the sum over the solves that led to the converged increment, so it can exceed this "
+                            "value",
                             min=1),
     "rtol": Field("float", 1e-9, "relative residual tolerance", positive=True),
     "atol": Field("float", 1e-6, "absolute residual tolerance (N); the round-off floor of the contact "

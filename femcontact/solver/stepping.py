@@ -1,13 +1,14 @@
 """Step a contact scene through its loads: increments, cuts, checkpoints.
 
 An increment whose Newton iteration does not converge (`NewtonFailure`: too many
-iterations, a non-finite residual or a failed linear solve) is retried from the last
-converged state, first with the contact stabilisation's continuation, then by
-pseudo-transient continuation (a rigid body that must travel a few contact elements to the
-contact that holds it), then halved, up to `SolverOptions.max_cuts` times; after a success it grows back. The last
-cut gets one more try (`increment(load, last_try=True)`). A run that still fails raises
-`SimulationFailed` naming the step, the time and the residual history. Any other
-exception is a fault, not non-convergence: it ends the run at once.
+iterations, a residual that has stopped moving, a non-finite residual or a failed linear
+solve) is retried from the last converged state, first with the contact stabilisation's
+continuation, then by pseudo-transient continuation (a rigid body that must travel a few
+contact elements to the contact that holds it), then halved, up to `SolverOptions.max_cuts`
+times; after a success it grows back. The last cut gets one more try (`increment(load,
+last_try=True)`). A run that still fails raises `SimulationFailed` naming the step, the time
+and the residual history. Any other exception is a fault, not non-convergence: it ends the run
+at once.
 Each converged increment's output row goes to the `listeners`, called as listener(row, cuts)
 (history file, progress).
 """
@@ -169,9 +170,10 @@ class Simulation:
     def increment(self, load, last_try: bool = False) -> dict:
         """Solve one increment from the last converged state (restored on any failure): the
         plain Newton solve, then the stabilised and the pseudo-transient continuation (given up
-        past `beyond_reach`; once it gave up, not again in the step); or (`last_try`, an increment that failed at every cut) pseudo-transient
-        continuation from here, then every contact stuck first (`locked_first_solve`). Returns
-        its output row, computed before the history moves on."""
+        past `beyond_reach`; once it gave up, not again in the step); or (`last_try`, an
+        increment that failed at every cut) pseudo-transient continuation from here, then every
+        contact stuck first (`locked_first_solve`). Returns its output row, computed before the
+        history moves on."""
         from femcontact.solver.newton import NewtonFailure
 
         p = self.problem
