@@ -1,22 +1,20 @@
 """Where a run's solve time goes: every Newton solve of a scene, by how it ended.
 
-Runs a scene in this process with `SchurNewton.solve` wrapped to record each solve's outcome,
-Newton iterations and wall time, and sums them in three kinds: plain solves (no stabilisation
-spring on), the continuation's converged solves (the stabilised and the pseudo-transient
-continuation, a spring on) and the solves that failed (any kind; the stepper then tries the next
-way or cuts the increment). With `--slow` it does so for each slow converged case of the last
-`make stability` sweep (results/stability/stability.toml: the cases whose solve time exceeds 3x
-their neighbours') and writes results/stability/newton_solves.md.
+Runs a scene in this process and reads its result's `info["newton_solves"]`: each
+`SchurNewton.solve` counted with its Newton iterations and wall time in three kinds, plain solves
+(no stabilisation spring on), the continuation's converged solves (the stabilised and the
+pseudo-transient continuation, a spring on) and the solves that failed (any kind; the stepper then
+tries the next way or cuts the increment). With `--slow` it does so for each slow converged case
+of the last `make stability` sweep (results/stability/stability.toml: the cases whose solve time
+exceeds 3x their neighbours') and writes results/stability/newton_solves.md.
 
     python -m benchmarks.newton_solves scenes/wedging_2d.toml [--set KEY=VALUE ...]
     python -m benchmarks.newton_solves --slow
 """
 import argparse
-import contextlib
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,47 +23,15 @@ import femcontact
 from benchmarks.stability import OUT, read_results, slow_cases
 from femcontact.config.scene import read_toml
 from femcontact.outputs.tables import markdown_table
-
-KINDS = ("plain", "continuation", "failed")
-
-
-@contextlib.contextmanager
-def recording(solves: list):
-    """Append (kind, Newton iterations, seconds) to `solves` for every `SchurNewton.solve` inside."""
-    from femcontact.solver import newton
-
-    solve = newton.SchurNewton.solve
-
-    def recorded(self, load, stiff_start: bool = False):
-        start = time.perf_counter()
-        try:
-            iterations = solve(self, load, stiff_start)
-        except newton.NewtonFailure as failure:
-            solves.append(("failed", max(len(failure.history) - 1, 0), time.perf_counter() - start))
-            raise
-        spring = bool(np.any(self.stabilization))
-        solves.append(("continuation" if spring else "plain", iterations, time.perf_counter() - start))
-        return iterations
-
-    newton.SchurNewton.solve = recorded
-    try:
-        yield solves
-    finally:
-        newton.SchurNewton.solve = solve
-
-
-def summary(solves: list) -> dict:
-    """{kind: (solves, Newton iterations, seconds)} of the recorded solves."""
-    return {kind: (sum(1 for k, _, _ in solves if k == kind), sum(n for k, n, _ in solves if k == kind),
-                   sum(s for k, _, s in solves if k == kind)) for kind in KINDS}
+from femcontact.solver.newton import SOLVE_KINDS as KINDS
 
 
 def run_recorded(scene: dict) -> tuple[dict, object]:
-    """Run the resolved scene (in a scratch directory) recording its Newton solves: (summary, Result)."""
-    solves = []
-    with tempfile.TemporaryDirectory() as out, recording(solves):
+    """Run the resolved scene (in a scratch directory): ({kind: (solves, Newton iterations, s)}, Result)."""
+    with tempfile.TemporaryDirectory() as out:
         result = femcontact.run(scene, out=out, quiet=True)
-    return summary(solves), result
+    solves = result.info["newton_solves"]
+    return {kind: (solves[kind]["solves"], solves[kind]["iterations"], solves[kind]["seconds"]) for kind in KINDS}, result
 
 
 ROW_COLUMNS = ["case", "status", "solve (s)"] + [f"{kind}: solves / iterations / s" for kind in KINDS]

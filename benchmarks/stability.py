@@ -198,6 +198,16 @@ def outcome_row(name: str, results: dict) -> list:
             sum(r is None for _, r in results.values()), len(defects(results))]
 
 
+def solve_kinds(result: dict) -> str:
+    """Where a case's solve time went, from its `newton_solves` (empty for a result without them):
+    seconds and Newton iterations in failed solves, the continuation's and plain Newton's."""
+    solves = result.get("info", {}).get("newton_solves")
+    if not solves:
+        return ""
+    return " (" + ", ".join(f"{kind} {solves[kind]['seconds']:.1f} s / {solves[kind]['iterations']} iterations"
+                            for kind in ("failed", "continuation", "plain")) + ")"
+
+
 def study_report(name: str, results: dict, needed: dict) -> tuple[list[str], int]:
     """The report's section of one sweep ({case id: (scene, result or None)}; `needed`: the friction
     each case's load needs, `friction_needed`) and its number of defects."""
@@ -220,7 +230,8 @@ def study_report(name: str, results: dict, needed: dict) -> tuple[list[str], int
     slow_ones = slow_cases(results)
     lines += [f"- converged cases whose solve time exceeds {SLOW_RATIO:g}x the median of their converged "
               f"neighbours' (mesh resolution within {NEIGHBOUR_RESOLUTION:g}x): {len(slow_ones)}"]
-    lines += [f"  - {cid}: solve {seconds:.1f} s, {ratio:.1f}x" for cid, seconds, ratio in slow_ones]
+    lines += [f"  - {cid}: solve {seconds:.1f} s, {ratio:.1f}x{solve_kinds(results[cid][1])}"
+              for cid, seconds, ratio in slow_ones]
     slow = sorted(((r["timings"].get("total", 0.0), cid) for cid, (_, r) in results.items() if r),
                   reverse=True)[:5]
     lines += ["", *markdown_table(["slowest cases", "wall time (s)", "Newton iterations"],

@@ -147,8 +147,9 @@ def run(scene, out=None, quiet: bool = False, checkpoint: bool = False, restart=
 
         clear = isinstance(error, (SimulationFailed, WriteError))  # their message says it all
         reason = str(error) if isinstance(error, WriteError) else f"{type(error).__name__}: {error}"
-        info = {} if clear else {"traceback": traceback.format_exc()}
-        result = {"status": "failed", "reason": reason, "metrics": {}, "timings": {}, "info": info}
+        info = {**getattr(error, "info", {})} if clear else {"traceback": traceback.format_exc()}
+        timings = {**getattr(error, "timings", {})} if clear else {}
+        result = {"status": "failed", "reason": reason, "metrics": {}, "timings": timings, "info": info}
         print(f"femcontact run: case failed: {reason}", file=sys.stderr)
         if "traceback" in info:
             print(info["traceback"], file=sys.stderr)

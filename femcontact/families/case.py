@@ -216,6 +216,7 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
         except SimulationFailed as failure:
             verdict = no_equilibrium(simulation, failure)
             if verdict is None:
+                failure.timings, failure.info = simulation.timings, {"newton_solves": simulation.newton_solves()}
                 raise
         verdict = verdict or run_on.verdict
     finally:
@@ -236,7 +237,8 @@ def run_contact(scene: dict, case_dir: Path, checkpoint: bool = False, restart=N
         metrics = {**outcome_metrics(simulation, verdict), "wall_time_s": float(sum(simulation.timings.values()))}
     info = {"dofs": simulation.dofs, "newton_iterations": metrics["newton_iterations"],
             "effects": list(scene["effects"]), "built": simulation.problem.built,
-            "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped}
+            "stabilized_increments": simulation.stabilized_increments, "stopped": simulation.stopped,
+            "newton_solves": simulation.newton_solves()}
     status = {} if verdict is None else {"status": "no_equilibrium", "reason": verdict["reason"]}
     return {**status, "metrics": metrics, "timings": simulation.timings, "info": info}
 

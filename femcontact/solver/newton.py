@@ -26,6 +26,8 @@ residual's curvature (`SchurNewton.curved_step`). A failed linear solve, a NaN, 
 stopped moving (`SchurNewton._stalled`) or too many iterations raise `NewtonFailure`, which the
 stepper answers by cutting the increment.
 """
+import time
+
 import numpy as np
 from dolfinx import la
 from dolfinx.fem import petsc
@@ -46,6 +48,10 @@ FLAT_SHRINK = 1 / 64
 fraction of the bracket."""
 CURVE_PROBE = 1.0 / 64
 """Fraction of the Newton step at which `curved_step` measures the residual's curvature."""
+SOLVE_KINDS = ("plain", "continuation", "failed")
+"""How a Newton solve ended, as `SchurNewton.solves` counts them: converged without the
+stabilisation spring, converged with it (the stabilised and the pseudo-transient continuation),
+or failed (any kind; the stepper then tries the next way or cuts the increment)."""
 
 
 class NewtonFailure(RuntimeError):
@@ -89,6 +95,8 @@ class SchurNewton:
         self.stabilization = np.zeros((n_r, n_r))  # spring tying the rigid body to `tie_pose` (N/mm, N*mm)
         self.tie_pose = np.zeros(n_r)  # the pose the stabilisation spring ties the body to (mm, rad)
         self._assembled = None  # (load, u, r, residual) of the last residual assembly
+        # where the solve time goes: kind -> [solves, Newton iterations, seconds] (SOLVE_KINDS)
+        self.solves = {kind: [0, 0, 0.0] for kind in SOLVE_KINDS}
         # the communicators of the vectors and matrices this solver creates (forms give them two)
         self._comms = {c.tompi4py().py2f(): c for c in (self.b_bulk.getComm(), self.Kc.getComm())}.values()
 
@@ -222,7 +230,25 @@ class SchurNewton:
         direction: no contact active, no support), so that the first step goes to the
         trust-region cap along the load; from there plain Newton can settle in another
         configuration (a 3-D peg rolled about the line through its two contacts and jammed
-        across the hole)."""
+        across the hole). Each solve is counted in `solves` by how it ended."""
+        start = time.perf_counter()
+        kind = "continuation" if np.any(self.stabilization) else "plain"
+        try:
+            iterations = self._iterate(load, stiff_start)
+        except NewtonFailure as failure:
+            self._count("failed", max(len(failure.history) - 1, 0), start)
+            raise
+        self._count(kind, iterations, start)
+        return iterations
+
+    def _count(self, kind: str, iterations: int, start: float) -> None:
+        counts = self.solves[kind]
+        counts[0] += 1
+        counts[1] += iterations
+        counts[2] += time.perf_counter() - start
+
+    def _iterate(self, load, stiff_start: bool) -> int:
+        """The Newton iterations of `solve`."""
         options = self.options
         history = []
         capped = None  # the last rigid step, if it was held at the trust-region cap

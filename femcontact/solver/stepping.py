@@ -26,11 +26,13 @@ from femcontact.io import write_json_atomic, write_npz_atomic
 
 class SimulationFailed(RuntimeError):
     """The solver gave up on an increment after cutting it `max_cuts` times: `step` (its index)
-    and `load` (the Load of the last increment tried) say where."""
+    and `load` (the Load of the last increment tried) say where; `timings` (s) and `info` (the
+    run's `newton_solves`), where the run that failed sets them, what it spent."""
 
     def __init__(self, message: str, step: int | None = None, load=None):
         super().__init__(message)
         self.step, self.load = step, load
+        self.timings, self.info = {}, {}
 
 
 def load_points(model) -> dict:
@@ -396,6 +398,14 @@ class Simulation:
         finally:
             p.lock_contacts(False)
         return iterations + self.newton.solve(load)
+
+    def newton_solves(self) -> dict:
+        """Where the solve time went: for each way a Newton solve ended (`newton.SOLVE_KINDS`: plain,
+        continuation, failed), its solves, Newton iterations and seconds. A slow run that spends
+        most of it in failed solves gave up many tries before an increment converged; one that
+        spends it in the continuation let the body travel far to rest."""
+        return {kind: {"solves": n, "iterations": iterations, "seconds": seconds}
+                for kind, (n, iterations, seconds) in self.newton.solves.items()}
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""

@@ -1,5 +1,5 @@
 """`make stability`'s report: converged cases far slower than their neighbours are named."""
-from benchmarks.stability import COUNT_2D, COUNT_3D, RESOLUTIONS, cases, check, slow_cases, study_report
+from benchmarks.stability import COUNT_2D, COUNT_3D, RESOLUTIONS, cases, check, slow_cases, solve_kinds, study_report
 
 
 def case(resolution: float, seconds: float, status: str = "ok", forms: float = 0.1):
@@ -15,6 +15,15 @@ def test_a_case_whose_solve_takes_three_times_its_neighbours_is_named():
     assert found[0][2] == 40.0 / 11.0  # the median of a, b and c
     # a case far from every other resolution has no neighbours, and a failed case is not timed
     assert "coarse" not in {cid for cid, _, _ in found}
+
+
+def test_a_slow_case_says_where_its_solve_time_went():
+    solves = {"plain": {"solves": 5, "iterations": 20, "seconds": 1.0},
+              "continuation": {"solves": 40, "iterations": 300, "seconds": 9.0},
+              "failed": {"solves": 20, "iterations": 800, "seconds": 30.0}}
+    assert solve_kinds({"info": {"newton_solves": solves}}) == (
+        " (failed 30.0 s / 800 iterations, continuation 9.0 s / 300 iterations, plain 1.0 s / 20 iterations)")
+    assert solve_kinds({"info": {}}) == ""  # a family that runs its own simulations writes no counts
 
 
 def test_compiling_the_forms_does_not_make_a_case_slow():
