@@ -95,8 +95,8 @@ class SchurNewton:
         self.stabilization = np.zeros((n_r, n_r))  # spring tying the rigid body to `tie_pose` (N/mm, N*mm)
         self.tie_pose = np.zeros(n_r)  # the pose the stabilisation spring ties the body to (mm, rad)
         self._assembled = None  # (load, u, r, residual) of the last residual assembly
-        # where the solve time goes: kind -> [solves, Newton iterations, seconds] (SOLVE_KINDS)
-        self.solves = {kind: [0, 0, 0.0] for kind in SOLVE_KINDS}
+        # where the solve time goes: kind (SOLVE_KINDS) -> its solves, Newton iterations and seconds
+        self.solves = {kind: {"solves": 0, "iterations": 0, "seconds": 0.0} for kind in SOLVE_KINDS}
         # the communicators of the vectors and matrices this solver creates (forms give them two)
         self._comms = {c.tompi4py().py2f(): c for c in (self.b_bulk.getComm(), self.Kc.getComm())}.values()
 
@@ -243,9 +243,9 @@ class SchurNewton:
 
     def _count(self, kind: str, iterations: int, start: float) -> None:
         counts = self.solves[kind]
-        counts[0] += 1
-        counts[1] += iterations
-        counts[2] += time.perf_counter() - start
+        counts["solves"] += 1
+        counts["iterations"] += iterations
+        counts["seconds"] += time.perf_counter() - start
 
     def _iterate(self, load, stiff_start: bool) -> int:
         """The Newton iterations of `solve`."""

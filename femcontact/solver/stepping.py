@@ -404,8 +404,7 @@ class Simulation:
         continuation, failed), its solves, Newton iterations and seconds. A slow run that spends
         most of it in failed solves gave up many tries before an increment converged; one that
         spends it in the continuation let the body travel far to rest."""
-        return {kind: {"solves": n, "iterations": iterations, "seconds": seconds}
-                for kind, (n, iterations, seconds) in self.newton.solves.items()}
+        return {kind: dict(counts) for kind, counts in self.newton.solves.items()}
 
     def step_end_rows(self) -> dict:
         """The last row of every step, by step name."""
