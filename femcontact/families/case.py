@@ -31,6 +31,9 @@ def summary_metrics(simulation) -> dict:
 PRELOAD_FLOOR = 1e-3
 """Contact force left by earlier steps, relative to the failing load, above which a preload may hold
 what a bare rigid peg cannot: the statics check then does not apply."""
+QUARTER_TURN = 90.0
+"""deg: a peg that pseudo-transient continuation turned farther than this without coming to rest
+has tipped over (`lifted_out`)."""
 REST_FRACTION = 1e-3
 """A peg running on under a load without equilibrium is at rest once its speed falls below this
 fraction of the largest it reached in the step."""
@@ -90,20 +93,29 @@ def _load_text(step: dict, load) -> str:
 
 
 def lifted_out(simulation, failure) -> dict | None:
-    """Whether the solver, before the run failed, saw the load lift the peg out of the hole: under
+    """Whether the solver, before the run failed, saw the load carry the peg out of the hole: under
     pseudo-transient continuation (`Simulation.pseudo_travel`, the rigid body's travel when it gave
-    up) the peg rose along the hole's axis by more than its insertion depth without coming to rest.
-    The verdict {'load', 'step', 'time', 'friction_needed' (None), 'mu'} or None."""
+    up) the peg rose along the hole's axis by more than its insertion depth, or turned by more
+    than a quarter turn (it tips over: no wedged pose lies that far from the lean it was placed
+    in), without coming to rest. The verdict {'load', 'step', 'time', 'friction_needed' (None),
+    'mu'} or None."""
     scene = simulation.scene
     travel = simulation.pseudo_travel.get(failure.step)
     if travel is None or not _free_peg_in_hole(scene):
         return None
-    rise, depth = float(travel[scene["dim"] - 1]), scene["peg"]["insertion_depth"]
-    if not rise > depth:
+    dim = scene["dim"]
+    rise, depth = float(travel[dim - 1]), scene["peg"]["insertion_depth"]
+    turn = math.degrees(math.sqrt(sum(float(angle) ** 2 for angle in travel[dim:])))
+    if rise > depth:
+        carried = (f"lifts the peg out of the hole: under pseudo-transient continuation it rose by {rise:.3g} mm, "
+                   f"more than its insertion depth of {depth:g} mm")
+    elif turn > QUARTER_TURN:
+        carried = (f"tips the peg over: under pseudo-transient continuation it turned by {turn:.3g} deg, more "
+                   f"than a quarter turn")
+    else:
         return None
     step = scene["steps"][failure.step]
-    text = (f"{_load_text(step, failure.load)} lifts the peg out of the hole: under pseudo-transient continuation "
-            f"it rose by {rise:.3g} mm, more than its insertion depth of {depth:g} mm, without coming to rest")
+    text = f"{_load_text(step, failure.load)} {carried}, without coming to rest"
     return {"load": text, "step": step["name"], "time": float(failure.load.time), "friction_needed": None,
             "mu": friction_coefficient(scene)}
 

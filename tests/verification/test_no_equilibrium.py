@@ -176,3 +176,29 @@ def test_a_3d_couple_in_the_plane_of_the_lean_is_decided_by_the_statics_of_its_s
     if result:
         assert result["metrics"]["friction_needed"] == pytest.approx(0.010963, rel=1e-3)
         assert "in two-point contact: it needs mu >= 0.01096, the scene has mu = 0.005" in result["reason"]
+
+
+def test_a_peg_the_continuation_turns_over_has_tipped_out():
+    """Seed 5's 1e212801c906: a couple of 2,520 N mm on a peg 3.73 mm deep. With inertia the peg
+    tips out of the hole at t = 0.7477 s (docs/stability.md); quasi-statically, at resolution
+    1.093, pseudo-transient continuation gives up at t = 0.7445 s having turned the peg by 2.39 rad
+    and lifted it by 1.75 mm, less than its insertion depth. More than a quarter turn without
+    coming to rest is the verdict; a smaller turn is not."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from femcontact.families.case import lifted_out
+
+    scene = load_scene(SCENE, [*COARSE, "contact.mu=0.3542", "hole.width=40.1634", "peg.insertion_depth=3.728",
+                               "steps.0.force=[]", "steps.0.moment=[2520.0]"])
+    failure = SimpleNamespace(step=0, load=SimpleNamespace(time=0.7445, force=np.zeros(2), moment=np.array([1876.2])))
+
+    def verdict(travel):
+        return lifted_out(SimpleNamespace(scene=scene, pseudo_travel={0: np.array(travel)}), failure)
+
+    tipped = verdict([1.537, 1.749, 2.386])
+    assert tipped["step"] == "load" and tipped["friction_needed"] is None and tipped["mu"] == 0.3542
+    assert "couple 1876 N*mm) tips the peg over: under pseudo-transient continuation it turned by 137 deg" in tipped["load"]
+    assert verdict([1.537, 1.749, 1.5]) is None  # 86 deg: not yet over
+    assert "it rose by 3.8 mm, more than its insertion depth of 3.728 mm" in verdict([0.0, 3.8, 0.1])["load"]
