@@ -33,7 +33,7 @@ PRELOAD_FLOOR = 1e-3
 what a bare rigid peg cannot: the statics check then does not apply."""
 QUARTER_TURN = 90.0
 """deg: a peg that pseudo-transient continuation turned farther than this without coming to rest
-has tipped over (`lifted_out`)."""
+has tipped over (`carried_out`)."""
 REST_FRACTION = 1e-3
 """A peg running on under a load without equilibrium is at rest once its speed falls below this
 fraction of the largest it reached in the step."""
@@ -92,7 +92,7 @@ def _load_text(step: dict, load) -> str:
             f"{step['load_point']}, couple {couple} N*mm)")
 
 
-def lifted_out(simulation, failure) -> dict | None:
+def carried_out(simulation, failure) -> dict | None:
     """Whether the solver, before the run failed, saw the load carry the peg out of the hole: under
     pseudo-transient continuation (`Simulation.pseudo_travel`, the rigid body's travel when it gave
     up) the peg rose along the hole's axis by more than its insertion depth, or turned by more
@@ -122,11 +122,11 @@ def lifted_out(simulation, failure) -> dict | None:
 
 def no_equilibrium(simulation, failure) -> dict | None:
     """Whether a quasi-static run that failed (SimulationFailed `failure`) did so because its load
-    has no static equilibrium (`statics_verdict`, or the solver saw it lift the peg out of the hole:
-    `lifted_out`): the verdict with its 'reason', or None."""
+    has no static equilibrium (`statics_verdict`, or the solver saw it carry the peg out of the hole:
+    `carried_out`): the verdict with its 'reason', or None."""
     if failure.load is None or "inertia" in simulation.scene["effects"]:
         return None
-    verdict = statics_verdict(simulation, failure.step, failure.load) or lifted_out(simulation, failure)
+    verdict = statics_verdict(simulation, failure.step, failure.load) or carried_out(simulation, failure)
     if verdict is None:
         return None  # an equilibrium exists (or the statics do not apply): the failure is the solver's
     message = str(failure)

@@ -188,14 +188,14 @@ def test_a_peg_the_continuation_turns_over_has_tipped_out():
 
     import numpy as np
 
-    from femcontact.families.case import lifted_out
+    from femcontact.families.case import carried_out
 
     scene = load_scene(SCENE, [*COARSE, "contact.mu=0.3542", "hole.width=40.1634", "peg.insertion_depth=3.728",
                                "steps.0.force=[]", "steps.0.moment=[2520.0]"])
     failure = SimpleNamespace(step=0, load=SimpleNamespace(time=0.7445, force=np.zeros(2), moment=np.array([1876.2])))
 
     def verdict(travel):
-        return lifted_out(SimpleNamespace(scene=scene, pseudo_travel={0: np.array(travel)}), failure)
+        return carried_out(SimpleNamespace(scene=scene, pseudo_travel={0: np.array(travel)}), failure)
 
     tipped = verdict([1.537, 1.749, 2.386])
     assert tipped["step"] == "load" and tipped["friction_needed"] is None and tipped["mu"] == 0.3542
