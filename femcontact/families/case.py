@@ -105,7 +105,7 @@ def carried_out(simulation, failure) -> dict | None:
         return None
     dim = scene["dim"]
     rise, depth = float(travel[dim - 1]), scene["peg"]["insertion_depth"]
-    turn = math.degrees(math.sqrt(sum(float(angle) ** 2 for angle in travel[dim:])))
+    turn = math.degrees(math.hypot(*travel[dim:]))  # the rotation vector's length
     if rise > depth:
         carried = (f"lifts the peg out of the hole: under pseudo-transient continuation it rose by {rise:.3g} mm, "
                    f"more than its insertion depth of {depth:g} mm")
